@@ -1,0 +1,38 @@
+# visprim: every target installs what it needs into .venv first.
+PYTHON ?= python3.11
+VENV   := .venv
+PY     := $(VENV)/bin/python
+export VIRTUAL_ENV := $(abspath $(VENV))
+
+.PHONY: install demo test bench lint format clean
+
+$(PY):
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip "maturin>=1.9.4,<2"
+
+install: $(PY)  ## build the Rust extension (release) and install visprim + dev deps into .venv
+	$(VENV)/bin/maturin develop --release -q -E dev
+
+demo: install   ## generate the default experiment, learn primitives, write the report to out/demo
+	$(VENV)/bin/visprim demo --out out/demo
+
+test: install   ## cargo test + pytest
+	cargo test --release -q
+	$(PY) -m pytest -q
+
+bench: install  ## criterion benches + visprim vs numpy/scipy/scikit-learn in one run
+	cargo bench --bench signal --bench linalg
+	$(PY) benches/compare.py
+
+lint: install   ## ruff, cargo fmt --check, clippy
+	$(VENV)/bin/ruff check python tests benches
+	$(VENV)/bin/ruff format --check python tests benches
+	cargo fmt --all -- --check
+	cargo clippy --all-targets --features python -- -D warnings
+
+format: $(PY)
+	$(VENV)/bin/ruff format python tests benches
+	cargo fmt --all
+
+clean:
+	rm -rf $(VENV) target out

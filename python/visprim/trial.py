@@ -1,0 +1,160 @@
+"""The one data type every stage exchanges: a recorded (or generated) arm trial.
+
+Frame convention (shared by the generator, the readers, inverse kinematics and the
+simulation; see :mod:`visprim.arm`): right-handed, metres, **+z up**; for a subject facing
+forward, +x is forward (anterior) and +y is to the subject's left. Readers convert every
+source to this frame. When the torso turns during a recording, ``body_frame`` gives its
+orientation per frame and inverse kinematics uses it instead of the world axes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+#: The four sensors of the method, in the order of ``Trial.markers[:, i]``.
+MARKER_NAMES: tuple[str, ...] = ("upper_arm", "forearm", "wrist", "finger")
+#: Joint centres in the order of ``Trial.joints[:, i]`` (when a recording provides them).
+JOINT_NAMES: tuple[str, ...] = ("shoulder", "elbow", "wrist")
+
+
+class TrialError(ValueError):
+    """A trial's arrays are inconsistent or unusable (the message names the trial)."""
+
+
+@dataclass(eq=False)
+class Truth:
+    """Ground truth of a generated trial.
+
+    Attributes
+    ----------
+    angles : (T, 4) float array, radians
+        The method's four angles per frame: shoulder Z-Y-Z Euler angles (γ, β, α) and elbow
+        flexion, as defined in :mod:`visprim.arm`.
+    boundaries : (n_strokes + 1,) float array, seconds
+        Stroke boundary times on the trial's clock, including its first and last stroke's
+        start and end.
+    labels : (n_strokes,) int array
+        Ground-truth stroke primitive of each stroke (an index into the generator's
+        vocabulary).
+    repetitions : int
+        Number of repetitions of the stimulus's repeated sub-sequence (≥ 1).
+    """
+
+    angles: NDArray[np.float64]
+    boundaries: NDArray[np.float64]
+    labels: NDArray[np.int64]
+    repetitions: int = 1
+
+
+@dataclass(eq=False)
+class Trial:
+    """One arm recording.
+
+    Attributes
+    ----------
+    times : (T,) float array, seconds
+        Strictly increasing timestamps (need not be uniform).
+    markers : (T, 4, 3) float array, metres
+        Positions of the four sensors of the method (:data:`MARKER_NAMES`: mid upper arm,
+        mid forearm, just above the wrist, middle finger / hand end), in the frame described
+        in the module docstring. Finite everywhere (readers fill or split gaps first).
+    joints : (T, 3, 3) float array, metres, optional
+        Shoulder, elbow and wrist joint centres (:data:`JOINT_NAMES`) when the source has
+        them (skeleton formats, anatomical landmarks). Inverse kinematics prefers them.
+    body_frame : (T, 3, 3) float array, optional
+        Torso orientation: column j is the body's x (forward), y (left), z (up) axis in the
+        recording frame. ``None`` means the body axes are the recording axes.
+    name : str
+        A short human-readable identifier (file stem, or ``s03_m07`` for generated data).
+    subject, stimulus : str or int or None
+        Who performed it and what was performed (generated data: integer ids).
+    repetitions : int
+        How many times the movement repeats; SEG-2 tunes its threshold on it. Default 1.
+    truth : Truth or None
+        Ground truth, for generated data only.
+    source : str or None
+        Path of the file it was read from.
+    meta : dict
+        Anything else a reader knows (frame rate, units in the file, style label, ...).
+    """
+
+    times: NDArray[np.float64]
+    markers: NDArray[np.float64]
+    joints: NDArray[np.float64] | None = None
+    body_frame: NDArray[np.float64] | None = None
+    name: str = ""
+    subject: str | int | None = None
+    stimulus: str | int | None = None
+    repetitions: int = 1
+    truth: Truth | None = None
+    source: str | None = None
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.times = np.ascontiguousarray(self.times, dtype=np.float64)
+        self.markers = np.ascontiguousarray(self.markers, dtype=np.float64)
+        where = self.source or self.name or "trial"
+        if self.times.ndim != 1:
+            raise TrialError(f"{where}: times must be 1-D, got shape {self.times.shape}")
+        n = self.times.shape[0]
+        if n < 2:
+            raise TrialError(f"{where}: a trial needs at least 2 frames, got {n}")
+        if self.markers.shape != (n, 4, 3):
+            raise TrialError(
+                f"{where}: markers must have shape (T, 4, 3) = ({n}, 4, 3), "
+                f"got {self.markers.shape}"
+            )
+        if not np.all(np.isfinite(self.times)):
+            raise TrialError(f"{where}: times contain NaN or infinity")
+        steps = np.diff(self.times)
+        if np.any(steps <= 0):
+            i = int(np.argmax(steps <= 0))
+            raise TrialError(
+                f"{where}: timestamps must be strictly increasing; frame {i + 1} "
+                f"({self.times[i + 1]:.6g} s) does not follow frame {i} ({self.times[i]:.6g} s)"
+            )
+        if not np.all(np.isfinite(self.markers)):
+            bad = np.flatnonzero(~np.isfinite(self.markers).all(axis=(1, 2)))
+            raise TrialError(
+                f"{where}: markers contain NaN or infinity in {bad.size} frame(s), first at "
+                f"frame {bad[0]} ({self.times[bad[0]]:.6g} s); fill or split gaps first"
+            )
+        for attr, shape in (("joints", (n, 3, 3)), ("body_frame", (n, 3, 3))):
+            value = getattr(self, attr)
+            if value is None:
+                continue
+            value = np.ascontiguousarray(value, dtype=np.float64)
+            if value.shape != shape:
+                raise TrialError(f"{where}: {attr} must have shape {shape}, got {value.shape}")
+            if not np.all(np.isfinite(value)):
+                raise TrialError(f"{where}: {attr} contain NaN or infinity")
+            setattr(self, attr, value)
+        if int(self.repetitions) < 1:
+            raise TrialError(f"{where}: repetitions must be >= 1, got {self.repetitions}")
+        self.repetitions = int(self.repetitions)
+
+    @property
+    def n_frames(self) -> int:
+        """Number of frames T."""
+        return int(self.times.shape[0])
+
+    @property
+    def duration(self) -> float:
+        """Seconds from the first to the last frame."""
+        return float(self.times[-1] - self.times[0])
+
+    @property
+    def frame_period(self) -> float:
+        """Median time between frames, in seconds."""
+        return float(np.median(np.diff(self.times)))
+
+    def __repr__(self) -> str:
+        extra = ", with truth" if self.truth is not None else ""
+        return (
+            f"Trial({self.name!r}, {self.n_frames} frames, {self.duration:.2f} s, "
+            f"repetitions={self.repetitions}{extra})"
+        )

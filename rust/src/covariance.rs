@@ -1,0 +1,1 @@
+//! TODO: kernel `covariance` (being written).

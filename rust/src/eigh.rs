@@ -1,0 +1,1 @@
+//! TODO: kernel `eigh` (being written).

@@ -1,0 +1,1 @@
+//! TODO: kernel `filter` (being written).

@@ -1,0 +1,1 @@
+//! TODO: kernel `kmeans` (being written).

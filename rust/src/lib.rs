@@ -1,0 +1,19 @@
+//! visprim numeric core: pure kernels on slices and views, no Python types.
+//!
+//! The PyO3 binding layer lives in [`py`] and is compiled only with the `python` feature
+//! (maturin enables it); `cargo test` and `cargo bench` use the kernels directly.
+
+pub mod error;
+
+pub mod filter;
+pub mod resample;
+pub mod zvc;
+
+pub mod covariance;
+pub mod eigh;
+pub mod kmeans;
+
+pub use error::{Error, Result};
+
+#[cfg(feature = "python")]
+mod py;

@@ -1,0 +1,1 @@
+//! TODO: kernel `resample` (being written).

@@ -1,0 +1,1 @@
+//! TODO: kernel `zvc` (being written).
