@@ -24,7 +24,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from _harness import Table, blas_info  # noqa: E402
 
-SECTIONS = ("bench_signal", "bench_linalg", "bench_pipeline")
+SECTIONS = ("bench_signal", "bench_linalg", "bench_pipeline", "bench_sim")
 
 
 def main() -> int:

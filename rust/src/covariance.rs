@@ -1,1 +1,448 @@
-//! TODO: kernel `covariance` (being written).
+//! Mean and covariance (divisor N) of the rows of a matrix, and a mergeable accumulator.
+//!
+//! The paper (Fod, Matarić, Jenkins) builds the covariance `K` of all resampled segments with
+//! divisor N. A corpus may not fit in one array, so [`Moments`] holds the sufficient statistics
+//! `(count, mean, scatter)` of a set of rows and can be updated with more rows or merged with
+//! another accumulator (Chan, Golub & LeVeque's pairwise update), giving the one-shot result up
+//! to rounding.
+//!
+//! The scatter matrix `Σ (x - mean)(x - mean)ᵀ` of a block of rows is computed on rows
+//! centred by a *shift* (the mean of the first rows of the block) in small sub-blocks, with
+//! faer's triangular matrix product (only the lower half of `YᵀY` is formed). The final
+//! correction `- n m mᵀ` (with `m` the mean of the shifted rows) is then tiny compared to the
+//! scatter, so data far from the origin (e.g. positions in metres around an offset) keeps its
+//! precision, unlike the textbook `XᵀX - n μμᵀ`.
+//!
+//! Parallelism: the rows are cut into a number of parts that depends only on `n` (never on the
+//! thread count); each part's scatter is computed sequentially and the parts are added in
+//! order, so results are bit-identical for any number of rayon threads.
+
+use faer::linalg::matmul::triangular::{matmul, BlockStructure};
+use faer::{Accum, MatMut, MatRef, Par};
+use rayon::prelude::*;
+
+use crate::{Error, Result};
+
+/// Rows per centred sub-block fed to the matrix product (the block stays in L2 for d ≈ 400).
+const SUB_BLOCK_ROWS: usize = 512;
+/// Minimum rows per parallel part, and the maximum number of parts.
+const MIN_PART_ROWS: usize = 2048;
+const MAX_PARTS: usize = 16;
+/// Rows averaged to form the shift.
+const SHIFT_ROWS: usize = 64;
+
+/// Sufficient statistics of a set of `count` rows of dimension `dim`: their mean and their
+/// scatter matrix `Σ (x - mean)(x - mean)ᵀ` (row-major, `dim × dim`, symmetric).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Moments {
+    dim: usize,
+    count: u64,
+    mean: Vec<f64>,
+    scatter: Vec<f64>,
+}
+
+impl Moments {
+    /// An empty accumulator for rows of dimension `dim`.
+    pub fn new(dim: usize) -> Self {
+        Self {
+            dim,
+            count: 0,
+            mean: vec![0.0; dim],
+            scatter: vec![0.0; dim * dim],
+        }
+    }
+
+    /// The statistics of the `n` rows of the row-major `n × dim` matrix `x`.
+    ///
+    /// Errors: `x.len() != n * dim` (Shape), a non-finite value (NonFinite). `n == 0` gives an
+    /// empty accumulator.
+    pub fn from_rows(x: &[f64], n: usize, dim: usize) -> Result<Self> {
+        check_rows(x, n, dim, "X")?;
+        if n == 0 {
+            return Ok(Self::new(dim));
+        }
+        let parts = n.div_ceil(MIN_PART_ROWS).clamp(1, MAX_PARTS);
+        let part_rows = n.div_ceil(parts);
+        let partials: Vec<Moments> = (0..parts)
+            .into_par_iter()
+            .map(|p| {
+                let start = p * part_rows;
+                let end = ((p + 1) * part_rows).min(n);
+                block_moments(&x[start * dim..end * dim], end - start, dim)
+            })
+            .collect();
+        let mut iter = partials.into_iter();
+        let mut acc = iter.next().expect("at least one part");
+        for part in iter {
+            acc.merge(&part)?;
+        }
+        Ok(acc)
+    }
+
+    /// Dimension of the rows.
+    pub fn dim(&self) -> usize {
+        self.dim
+    }
+
+    /// Number of rows seen.
+    pub fn count(&self) -> u64 {
+        self.count
+    }
+
+    /// Mean of the rows seen (zeros when empty).
+    pub fn mean(&self) -> &[f64] {
+        &self.mean
+    }
+
+    /// Scatter matrix `Σ (x - mean)(x - mean)ᵀ`, row-major `dim × dim` (zeros when empty).
+    pub fn scatter(&self) -> &[f64] {
+        &self.scatter
+    }
+
+    /// Rebuild an accumulator from stored statistics (e.g. unpickling).
+    ///
+    /// Errors: lengths that do not match `dim`, non-finite values, or a scatter matrix that is
+    /// not symmetric.
+    pub fn from_parts(dim: usize, count: u64, mean: Vec<f64>, scatter: Vec<f64>) -> Result<Self> {
+        if mean.len() != dim || scatter.len() != dim * dim {
+            return Err(Error::Shape(format!(
+                "moments of dimension {dim} need a mean of length {dim} and a {dim}x{dim} \
+                 scatter matrix, got lengths {} and {}",
+                mean.len(),
+                scatter.len()
+            )));
+        }
+        if mean.iter().chain(scatter.iter()).any(|v| !v.is_finite()) {
+            return Err(Error::NonFinite("moments contain NaN or infinity".into()));
+        }
+        for i in 0..dim {
+            for j in 0..i {
+                if scatter[i * dim + j] != scatter[j * dim + i] {
+                    return Err(Error::InvalidArgument(format!(
+                        "scatter matrix is not symmetric at ({i}, {j})"
+                    )));
+                }
+            }
+        }
+        Ok(Self {
+            dim,
+            count,
+            mean,
+            scatter,
+        })
+    }
+
+    /// Add the rows of the row-major `n × dim` matrix `x`.
+    pub fn update(&mut self, x: &[f64], n: usize) -> Result<()> {
+        let block = Self::from_rows(x, n, self.dim)?;
+        self.merge(&block)
+    }
+
+    /// Add the statistics of another accumulator (pairwise update of Chan et al.).
+    pub fn merge(&mut self, other: &Moments) -> Result<()> {
+        if other.dim != self.dim {
+            return Err(Error::Shape(format!(
+                "cannot merge moments of dimension {} into moments of dimension {}",
+                other.dim, self.dim
+            )));
+        }
+        if other.count == 0 {
+            return Ok(());
+        }
+        if self.count == 0 {
+            *self = other.clone();
+            return Ok(());
+        }
+        let d = self.dim;
+        let na = self.count as f64;
+        let nb = other.count as f64;
+        let n = na + nb;
+        let delta: Vec<f64> = (0..d).map(|i| other.mean[i] - self.mean[i]).collect();
+        let w = na * nb / n;
+        for i in 0..d {
+            let wi = w * delta[i];
+            let (srow, orow) = (
+                &mut self.scatter[i * d..(i + 1) * d],
+                &other.scatter[i * d..],
+            );
+            for j in 0..d {
+                srow[j] += orow[j] + wi * delta[j];
+            }
+        }
+        // The update adds wi·δj at (i, j) and wj·δi at (j, i): equal in exact arithmetic but
+        // not always in floating point; keep the matrix exactly symmetric.
+        symmetrize_from_lower(&mut self.scatter, d);
+        let fb = nb / n;
+        for i in 0..d {
+            self.mean[i] += delta[i] * fb;
+        }
+        self.count += other.count;
+        Ok(())
+    }
+
+    /// Covariance with divisor N (`scatter / count`), row-major `dim × dim`.
+    ///
+    /// Errors: no rows seen yet.
+    pub fn covariance(&self) -> Result<Vec<f64>> {
+        if self.count == 0 {
+            return Err(Error::Shape("covariance of zero rows is undefined".into()));
+        }
+        let inv = 1.0 / self.count as f64;
+        Ok(self.scatter.iter().map(|s| s * inv).collect())
+    }
+}
+
+/// Mean `(d,)` and covariance `(d, d)` with divisor N of the rows of the row-major `n × d`
+/// matrix `x`.
+///
+/// Errors: `n == 0` or `d == 0` (Shape), a length mismatch (Shape), NaN/inf (NonFinite).
+pub fn covariance(x: &[f64], n: usize, d: usize) -> Result<(Vec<f64>, Vec<f64>)> {
+    if n == 0 || d == 0 {
+        return Err(Error::Shape(format!(
+            "X is empty (shape {n}x{d}); need at least one row and one column"
+        )));
+    }
+    let m = Moments::from_rows(x, n, d)?;
+    let cov = m.covariance()?;
+    Ok((m.mean, cov))
+}
+
+fn check_rows(x: &[f64], n: usize, dim: usize, name: &str) -> Result<()> {
+    if x.len() != n * dim {
+        return Err(Error::Shape(format!(
+            "{name} has {} values, expected {n} rows x {dim} columns",
+            x.len()
+        )));
+    }
+    if let Some(pos) = x.iter().position(|v| !v.is_finite()) {
+        return Err(Error::NonFinite(format!(
+            "{name} contains NaN or infinity (row {}, column {})",
+            pos / dim.max(1),
+            pos % dim.max(1)
+        )));
+    }
+    Ok(())
+}
+
+/// Copy the lower triangle of a row-major `d × d` matrix onto its upper triangle.
+fn symmetrize_from_lower(a: &mut [f64], d: usize) {
+    for i in 0..d {
+        for j in 0..i {
+            a[j * d + i] = a[i * d + j];
+        }
+    }
+}
+
+/// Sequential statistics of one block of rows (`n ≥ 1`).
+fn block_moments(x: &[f64], n: usize, d: usize) -> Moments {
+    // Shift: mean of the first rows, close to the block mean for any reasonable data.
+    let ns = n.min(SHIFT_ROWS);
+    let mut shift = vec![0.0; d];
+    for row in x[..ns * d].chunks_exact(d) {
+        for (s, v) in shift.iter_mut().zip(row) {
+            *s += v;
+        }
+    }
+    for s in &mut shift {
+        *s /= ns as f64;
+    }
+
+    // Lower half of Σ yyᵀ (column-major d × d; symmetric, so row-major is the transpose) and
+    // Σ y over the shifted rows y = x - shift.
+    let mut gram = vec![0.0; d * d];
+    let mut colsum = vec![0.0; d];
+    let mut buf = vec![0.0; SUB_BLOCK_ROWS.min(n) * d];
+    for (b, rows) in x.chunks(SUB_BLOCK_ROWS * d).enumerate() {
+        let nb = rows.len() / d;
+        let y = &mut buf[..rows.len()];
+        for (yrow, xrow) in y.chunks_exact_mut(d).zip(rows.chunks_exact(d)) {
+            for ((yv, xv), (s, c)) in yrow
+                .iter_mut()
+                .zip(xrow)
+                .zip(shift.iter().zip(colsum.iter_mut()))
+            {
+                *yv = xv - s;
+                *c += *yv;
+            }
+        }
+        let yr = MatRef::from_row_major_slice(&*y, nb, d);
+        let g = MatMut::from_column_major_slice_mut(&mut gram, d, d);
+        matmul(
+            g,
+            BlockStructure::TriangularLower,
+            if b == 0 { Accum::Replace } else { Accum::Add },
+            yr.transpose(),
+            BlockStructure::Rectangular,
+            yr,
+            BlockStructure::Rectangular,
+            1.0,
+            Par::Seq,
+        );
+    }
+
+    // gram is column-major lower: element (i, j), i ≥ j, at j * d + i. Subtract n m mᵀ with
+    // m = colsum / n and write the row-major lower triangle, then mirror it.
+    let nf = n as f64;
+    let m: Vec<f64> = colsum.iter().map(|c| c / nf).collect();
+    let mut scatter = vec![0.0; d * d];
+    for j in 0..d {
+        for i in j..d {
+            scatter[i * d + j] = gram[j * d + i] - nf * m[i] * m[j];
+        }
+    }
+    symmetrize_from_lower(&mut scatter, d);
+    let mean = shift.iter().zip(&m).map(|(s, mi)| s + mi).collect();
+    Moments {
+        dim: d,
+        count: n as u64,
+        mean,
+        scatter,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Deterministic pseudo-random values in [-0.5, 0.5) (SplitMix64).
+    fn values(n: usize, seed: u64) -> Vec<f64> {
+        let mut s = seed;
+        (0..n)
+            .map(|_| {
+                s = s.wrapping_add(0x9E37_79B9_7F4A_7C15);
+                let mut z = s;
+                z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+                z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+                z ^= z >> 31;
+                (z >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect()
+    }
+
+    /// Two-pass textbook reference.
+    fn naive(x: &[f64], n: usize, d: usize) -> (Vec<f64>, Vec<f64>) {
+        let mut mean = vec![0.0; d];
+        for r in x.chunks_exact(d) {
+            for j in 0..d {
+                mean[j] += r[j];
+            }
+        }
+        mean.iter_mut().for_each(|m| *m /= n as f64);
+        let mut cov = vec![0.0; d * d];
+        for r in x.chunks_exact(d) {
+            for i in 0..d {
+                for j in 0..d {
+                    cov[i * d + j] += (r[i] - mean[i]) * (r[j] - mean[j]);
+                }
+            }
+        }
+        cov.iter_mut().for_each(|c| *c /= n as f64);
+        (mean, cov)
+    }
+
+    fn assert_close(a: &[f64], b: &[f64], tol: f64) {
+        let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
+        for (x, y) in a.iter().zip(b) {
+            assert!((x - y).abs() <= tol * scale, "{x} vs {y}");
+        }
+    }
+
+    #[test]
+    fn known_answer_two_points() {
+        // Rows (0, 0) and (2, 4): mean (1, 2), covariance [[1, 2], [2, 4]] with divisor 2.
+        let (mean, cov) = covariance(&[0.0, 0.0, 2.0, 4.0], 2, 2).unwrap();
+        assert_eq!(mean, vec![1.0, 2.0]);
+        assert_eq!(cov, vec![1.0, 2.0, 2.0, 4.0]);
+    }
+
+    #[test]
+    fn single_row_has_zero_covariance() {
+        let (mean, cov) = covariance(&[3.0, -1.0, 7.0], 1, 3).unwrap();
+        assert_eq!(mean, vec![3.0, -1.0, 7.0]);
+        assert!(cov.iter().all(|&c| c == 0.0));
+    }
+
+    #[test]
+    fn matches_naive_across_part_boundaries() {
+        for &(n, d) in &[(1usize, 1usize), (5, 3), (257, 7), (5000, 13), (40_000, 4)] {
+            let x = values(n * d, (n * 31 + d) as u64);
+            let (m, c) = covariance(&x, n, d).unwrap();
+            let (m0, c0) = naive(&x, n, d);
+            assert_close(&m, &m0, 1e-12);
+            assert_close(&c, &c0, 1e-12);
+            for i in 0..d {
+                for j in 0..d {
+                    assert_eq!(c[i * d + j], c[j * d + i]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn large_offset_keeps_precision() {
+        let (n, d) = (3000, 3);
+        let mut x = values(n * d, 7);
+        let base = x.clone();
+        x.iter_mut().for_each(|v| *v += 1.0e6);
+        let (m, c) = covariance(&x, n, d).unwrap();
+        let (_, c0) = naive(&base, n, d);
+        assert!((m[0] - 1.0e6).abs() < 1.0);
+        // Offset 1e6 on values of spread ~0.3: the textbook XᵀX formula loses everything here.
+        assert_close(&c, &c0, 1e-8);
+    }
+
+    #[test]
+    fn chunked_updates_and_merges_equal_one_shot() {
+        let (n, d) = (3001, 6);
+        let x = values(n * d, 3);
+        let whole = Moments::from_rows(&x, n, d).unwrap();
+        let mut acc = Moments::new(d);
+        let mut other = Moments::new(d);
+        acc.update(&x[..1000 * d], 1000).unwrap();
+        acc.update(&x[1000 * d..1000 * d], 0).unwrap();
+        other.update(&x[1000 * d..2500 * d], 1500).unwrap();
+        other.update(&x[2500 * d..], 501).unwrap();
+        acc.merge(&other).unwrap();
+        assert_eq!(acc.count(), n as u64);
+        assert_close(acc.mean(), whole.mean(), 1e-13);
+        assert_close(
+            &acc.covariance().unwrap(),
+            &whole.covariance().unwrap(),
+            1e-12,
+        );
+    }
+
+    #[test]
+    fn thread_count_does_not_change_bits() {
+        let (n, d) = (20_000, 9);
+        let x = values(n * d, 11);
+        let run = |t: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .unwrap();
+            pool.install(|| covariance(&x, n, d).unwrap())
+        };
+        assert_eq!(run(1), run(3));
+    }
+
+    #[test]
+    fn errors() {
+        assert!(matches!(covariance(&[], 0, 3), Err(Error::Shape(_))));
+        assert!(matches!(
+            covariance(&[1.0, 2.0, 3.0], 2, 2),
+            Err(Error::Shape(_))
+        ));
+        assert!(matches!(
+            covariance(&[1.0, f64::NAN], 1, 2),
+            Err(Error::NonFinite(_))
+        ));
+        assert!(matches!(Moments::new(2).covariance(), Err(Error::Shape(_))));
+        let mut a = Moments::new(2);
+        assert!(matches!(a.merge(&Moments::new(3)), Err(Error::Shape(_))));
+        assert!(matches!(
+            Moments::from_parts(2, 1, vec![0.0; 2], vec![1.0, 2.0, 3.0, 4.0]),
+            Err(Error::InvalidArgument(_))
+        ));
+    }
+}

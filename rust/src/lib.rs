@@ -5,7 +5,10 @@
 
 pub mod error;
 
+pub mod checks;
 pub mod filter;
+pub mod lanes;
+pub mod ragged;
 pub mod resample;
 pub mod zvc;
 

@@ -1,7 +1,347 @@
-//! Bindings of the signal kernels.
+//! Bindings of the signal kernels (filter, zero-velocity crossings, resampling).
+//!
+//! Each function only converts and checks its Python arguments (ndarray type, dtype, ndim; a
+//! copy when an array is not C-contiguous), runs the pure kernel with the GIL released, and
+//! returns numpy arrays that take ownership of the kernel's buffers (no copy). Value checks
+//! (NaN/inf, ranges, lengths) live in the kernels and come back as `ValueError`.
 
+use std::borrow::Cow;
+
+use numpy::ndarray::{ArrayD, IxDyn};
+use numpy::{
+    IntoPyArray, PyArray1, PyArray2, PyArrayDescrMethods, PyArrayDyn, PyArrayMethods,
+    PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods,
+};
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 
-pub(crate) fn register(_m: &Bound<'_, PyModule>) -> PyResult<()> {
+use crate::filter::{self, Sos};
+use crate::{resample, zvc};
+
+/// A read-only float64 array argument, with its name for messages.
+struct F64Arg<'py> {
+    arr: PyReadonlyArrayDyn<'py, f64>,
+    shape: Vec<usize>,
+}
+
+impl F64Arg<'_> {
+    /// The values in C (row-major) order: borrowed when the array is C-contiguous, else copied.
+    fn values(&self) -> Cow<'_, [f64]> {
+        let view = self.arr.as_array();
+        match view.to_slice() {
+            Some(s) => Cow::Borrowed(s),
+            None => Cow::Owned(view.iter().copied().collect()),
+        }
+    }
+}
+
+fn shape_str(shape: &[usize]) -> String {
+    match shape {
+        [n] => format!("({n},)"),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(|d| d.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+fn as_ndarray<'a, 'py>(
+    obj: &'a Bound<'py, PyAny>,
+    name: &str,
+    what: &str,
+) -> PyResult<&'a Bound<'py, PyUntypedArray>> {
+    obj.cast::<PyUntypedArray>().map_err(|_| {
+        let ty = obj
+            .get_type()
+            .name()
+            .map(|n| n.to_string())
+            .unwrap_or_else(|_| "?".into());
+        PyTypeError::new_err(format!("{name} must be a numpy.ndarray of {what}, got {ty}"))
+    })
+}
+
+/// `obj` as a float64 array with one of the allowed numbers of dimensions.
+fn f64_arg<'py>(obj: &Bound<'py, PyAny>, name: &str, ndims: &[usize]) -> PyResult<F64Arg<'py>> {
+    let arr = as_ndarray(obj, name, "float64")?;
+    if !arr.dtype().is_equiv_to(&numpy::dtype::<f64>(obj.py())) {
+        return Err(PyTypeError::new_err(format!(
+            "{name} must have dtype float64, got {}; convert it with .astype(numpy.float64)",
+            arr.dtype()
+        )));
+    }
+    if !ndims.contains(&arr.ndim()) {
+        let want = ndims
+            .iter()
+            .map(|d| format!("{d}-D"))
+            .collect::<Vec<_>>()
+            .join(" or ");
+        return Err(PyValueError::new_err(format!(
+            "{name} must be {want}, got shape {}",
+            shape_str(arr.shape())
+        )));
+    }
+    let shape = arr.shape().to_vec();
+    let arr = arr.cast::<PyArrayDyn<f64>>()?.readonly();
+    Ok(F64Arg { arr, shape })
+}
+
+/// `offsets` as a 1-D int64 array, copied to a vector.
+fn offsets_arg(obj: &Bound<'_, PyAny>) -> PyResult<Vec<i64>> {
+    let arr = as_ndarray(obj, "offsets", "int64")?;
+    if !arr.dtype().is_equiv_to(&numpy::dtype::<i64>(obj.py())) {
+        return Err(PyTypeError::new_err(format!(
+            "offsets must have dtype int64, got {}; convert it with .astype(numpy.int64)",
+            arr.dtype()
+        )));
+    }
+    if arr.ndim() != 1 {
+        return Err(PyValueError::new_err(format!(
+            "offsets must be 1-D (the first frame of each trial), got shape {}",
+            shape_str(arr.shape())
+        )));
+    }
+    let arr = arr.cast::<PyArrayDyn<i64>>()?.readonly();
+    Ok(arr.as_array().iter().copied().collect())
+}
+
+/// `sos` as a list of sections.
+fn sos_arg(obj: &Bound<'_, PyAny>) -> PyResult<Vec<Sos>> {
+    let arg = f64_arg(obj, "sos", &[2])?;
+    if arg.shape[1] != 6 {
+        return Err(PyValueError::new_err(format!(
+            "sos must have shape (n_sections, 6), got {}",
+            shape_str(&arg.shape)
+        )));
+    }
+    Ok(arg
+        .values()
+        .chunks_exact(6)
+        .map(|c| c.try_into().expect("chunks of 6"))
+        .collect())
+}
+
+fn padlen_arg(padlen: Option<i64>) -> PyResult<Option<usize>> {
+    match padlen {
+        Some(p) if p < 0 => Err(PyValueError::new_err(format!(
+            "padlen must be >= 0 (samples of odd extension at each end), got {p}"
+        ))),
+        p => Ok(p.map(|p| p as usize)),
+    }
+}
+
+fn min_change_arg(min_change: f64) -> PyResult<f64> {
+    if !(min_change.is_finite() && min_change >= 0.0) {
+        return Err(PyValueError::new_err(format!(
+            "min_change must be a finite number >= 0, got {min_change}"
+        )));
+    }
+    Ok(min_change)
+}
+
+/// Rows x channels of a 1-D (one channel) or 2-D `(frames, channels)` argument.
+fn frames_channels(shape: &[usize]) -> (usize, usize) {
+    match shape {
+        [n] => (*n, 1),
+        [n, c] => (*n, *c),
+        _ => unreachable!("ndim checked"),
+    }
+}
+
+/// Low-pass Butterworth design as second-order sections, `(n_sections, 6)`, equal to
+/// `scipy.signal.butter(order, cutoff, output="sos")`.
+#[pyfunction]
+fn butter_sos<'py>(py: Python<'py>, order: i64, cutoff: f64) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    if order < 1 {
+        return Err(PyValueError::new_err(format!(
+            "order must be an integer >= 1, got {order}"
+        )));
+    }
+    let sos = filter::butter_sos(order as usize, cutoff)?;
+    let n = sos.len();
+    let flat: Vec<f64> = sos.into_iter().flatten().collect();
+    Ok(PyArray1::from_vec(py, flat).reshape([n, 6])?)
+}
+
+/// scipy's default `padlen` of `sosfiltfilt` for this filter (samples of odd extension at each
+/// end; a signal must be longer).
+#[pyfunction]
+fn default_padlen(sos: &Bound<'_, PyAny>) -> PyResult<usize> {
+    let sos = sos_arg(sos)?;
+    filter::validate_sos(&sos)?;
+    Ok(filter::default_padlen(&sos))
+}
+
+/// Zero-phase filtering along the last axis of a 1-D or 2-D float64 array, equal to
+/// `scipy.signal.sosfiltfilt(sos, x, padlen=padlen)`.
+#[pyfunction]
+#[pyo3(signature = (sos, x, padlen=None))]
+fn sosfiltfilt<'py>(
+    py: Python<'py>,
+    sos: &Bound<'py, PyAny>,
+    x: &Bound<'py, PyAny>,
+    padlen: Option<i64>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let sos = sos_arg(sos)?;
+    let padlen = padlen_arg(padlen)?;
+    let x = f64_arg(x, "x", &[1, 2])?;
+    let (rows, n) = match x.shape[..] {
+        [n] => (1, n),
+        [r, n] => (r, n),
+        _ => unreachable!("ndim checked"),
+    };
+    let values = x.values();
+    let values: &[f64] = &values;
+    let out = py.detach(|| filter::sosfiltfilt_rows(&sos, values, rows, n, padlen))?;
+    Ok(ArrayD::from_shape_vec(IxDyn(&x.shape), out)
+        .expect("shape of the input")
+        .into_pyarray(py))
+}
+
+/// Zero-phase filtering of every trial of a ragged corpus `values` `(total_frames, channels)`
+/// (or 1-D, one channel) along time, trial `i` starting at frame `offsets[i]`.
+#[pyfunction]
+#[pyo3(signature = (sos, values, offsets, padlen=None))]
+fn sosfiltfilt_ragged<'py>(
+    py: Python<'py>,
+    sos: &Bound<'py, PyAny>,
+    values: &Bound<'py, PyAny>,
+    offsets: &Bound<'py, PyAny>,
+    padlen: Option<i64>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let sos = sos_arg(sos)?;
+    let padlen = padlen_arg(padlen)?;
+    let v = f64_arg(values, "values", &[1, 2])?;
+    let offsets = offsets_arg(offsets)?;
+    let (_, channels) = frames_channels(&v.shape);
+    let data = v.values();
+    let data: &[f64] = &data;
+    let out = py.detach(|| filter::sosfiltfilt_ragged(&sos, data, channels, &offsets, padlen))?;
+    Ok(ArrayD::from_shape_vec(IxDyn(&v.shape), out)
+        .expect("shape of the input")
+        .into_pyarray(py))
+}
+
+/// `positions` checked against the velocity's shape.
+fn positions_arg<'py>(
+    positions: Option<&Bound<'py, PyAny>>,
+    shape: &[usize],
+) -> PyResult<Option<F64Arg<'py>>> {
+    let Some(p) = positions else { return Ok(None) };
+    let p = f64_arg(p, "positions", &[1, 2])?;
+    if p.shape != shape {
+        return Err(PyValueError::new_err(format!(
+            "positions must have the shape of velocity {}, got {}",
+            shape_str(shape),
+            shape_str(&p.shape)
+        )));
+    }
+    Ok(Some(p))
+}
+
+type Crossings1<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>);
+
+/// Zero-velocity crossings of `velocity` `(frames, channels)` (1-D: one channel) as
+/// `(frames float64, channels int64)`, sorted by channel then frame.
+#[pyfunction]
+#[pyo3(signature = (velocity, min_change=0.0, positions=None))]
+fn zero_velocity_crossings<'py>(
+    py: Python<'py>,
+    velocity: &Bound<'py, PyAny>,
+    min_change: f64,
+    positions: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Crossings1<'py>> {
+    let v = f64_arg(velocity, "velocity", &[1, 2])?;
+    let min_change = min_change_arg(min_change)?;
+    let p = positions_arg(positions, &v.shape)?;
+    let (_, channels) = frames_channels(&v.shape);
+    let vel = v.values();
+    let vel: &[f64] = &vel;
+    let pos = p.as_ref().map(|p| p.values());
+    let pos: Option<&[f64]> = pos.as_deref();
+    let (frames, chans) =
+        py.detach(|| zvc::zero_velocity_crossings(vel, channels, min_change, pos))?;
+    Ok((frames.into_pyarray(py), chans.into_pyarray(py)))
+}
+
+type Crossings3<'py> = (
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<f64>>,
+);
+
+/// Zero-velocity crossings of every trial of a ragged corpus as `(trial, channel, frame)`,
+/// frames relative to each trial's first frame, sorted by trial, channel, frame.
+#[pyfunction]
+#[pyo3(signature = (velocity, offsets, min_change=0.0, positions=None))]
+fn zero_velocity_crossings_ragged<'py>(
+    py: Python<'py>,
+    velocity: &Bound<'py, PyAny>,
+    offsets: &Bound<'py, PyAny>,
+    min_change: f64,
+    positions: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Crossings3<'py>> {
+    let v = f64_arg(velocity, "velocity", &[1, 2])?;
+    let offsets = offsets_arg(offsets)?;
+    let min_change = min_change_arg(min_change)?;
+    let p = positions_arg(positions, &v.shape)?;
+    let (_, channels) = frames_channels(&v.shape);
+    let vel = v.values();
+    let vel: &[f64] = &vel;
+    let pos = p.as_ref().map(|p| p.values());
+    let pos: Option<&[f64]> = pos.as_deref();
+    let c = py.detach(|| {
+        zvc::zero_velocity_crossings_ragged(vel, channels, &offsets, min_change, pos)
+    })?;
+    Ok((
+        c.trial.into_pyarray(py),
+        c.channel.into_pyarray(py),
+        c.frame.into_pyarray(py),
+    ))
+}
+
+/// Each segment `[starts[i], ends[i]]` (fractional frames) of `values` `(frames, channels)`
+/// linearly resampled to `n` points per channel: `(n_segments, channels * n)`, channel-major.
+#[pyfunction]
+#[pyo3(signature = (values, starts, ends, n=100))]
+fn resample_segments<'py>(
+    py: Python<'py>,
+    values: &Bound<'py, PyAny>,
+    starts: &Bound<'py, PyAny>,
+    ends: &Bound<'py, PyAny>,
+    n: i64,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let v = f64_arg(values, "values", &[1, 2])?;
+    let s = f64_arg(starts, "starts", &[1])?;
+    let e = f64_arg(ends, "ends", &[1])?;
+    if n < 2 {
+        return Err(PyValueError::new_err(format!(
+            "n (samples per channel) must be at least 2, got {n}"
+        )));
+    }
+    let n = n as usize;
+    let (_, channels) = frames_channels(&v.shape);
+    let data = v.values();
+    let data: &[f64] = &data;
+    let starts = s.values();
+    let starts: &[f64] = &starts;
+    let ends = e.values();
+    let ends: &[f64] = &ends;
+    let out = py.detach(|| resample::resample_segments(data, channels, starts, ends, n))?;
+    let rows = starts.len();
+    Ok(PyArray1::from_vec(py, out).reshape([rows, channels * n])?)
+}
+
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(butter_sos, m)?)?;
+    m.add_function(wrap_pyfunction!(default_padlen, m)?)?;
+    m.add_function(wrap_pyfunction!(sosfiltfilt, m)?)?;
+    m.add_function(wrap_pyfunction!(sosfiltfilt_ragged, m)?)?;
+    m.add_function(wrap_pyfunction!(zero_velocity_crossings, m)?)?;
+    m.add_function(wrap_pyfunction!(zero_velocity_crossings_ragged, m)?)?;
+    m.add_function(wrap_pyfunction!(resample_segments, m)?)?;
     Ok(())
 }

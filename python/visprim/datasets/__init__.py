@@ -1,0 +1,44 @@
+"""The generated imitation experiment (default data of visprim), with ground truth.
+
+Reproduces the setting of Fod, Matarić & Jenkins: 11 subjects imitate 20 short (3–5 s)
+demonstrations of arm movements while four position sensors on the right arm (mid upper
+arm, mid forearm, just above the wrist, middle finger) are read every 34 ms with ≈2 mm
+accuracy. Modules:
+
+* :mod:`~visprim.datasets.anthropometry` — segment lengths from height (Winter 2009);
+* :mod:`~visprim.datasets.vocabulary` — key postures and the 15 stroke primitives;
+* :mod:`~visprim.datasets.stimuli` — the 20 stimuli (stroke chains, repetitions);
+* :mod:`~visprim.datasets.subjects` — human variability in imitating a stimulus;
+* :mod:`~visprim.datasets.motion` — the continuous joint-space motion (minimum jerk);
+* :mod:`~visprim.datasets.measurement` — sensors, drift, vibration, noise, sampling;
+* :mod:`~visprim.datasets.experiment` — :func:`imitation_experiment`,
+  :func:`export_experiment`.
+"""
+
+from __future__ import annotations
+
+from visprim.datasets.experiment import (
+    export_experiment,
+    generate_trial,
+    imitation_experiment,
+    stimuli,
+    subjects,
+)
+from visprim.datasets.measurement import Measurement
+from visprim.datasets.stimuli import STIMULI, Stimulus
+from visprim.datasets.vocabulary import POSTURES_DEG, PRIMITIVE_NAMES, VOCABULARY, Primitive
+
+__all__ = [
+    "POSTURES_DEG",
+    "PRIMITIVE_NAMES",
+    "STIMULI",
+    "VOCABULARY",
+    "Measurement",
+    "Primitive",
+    "Stimulus",
+    "export_experiment",
+    "generate_trial",
+    "imitation_experiment",
+    "stimuli",
+    "subjects",
+]

@@ -1,0 +1,201 @@
+"""The generated imitation experiment: subjects × stimuli trials with ground truth."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from visprim.datasets.measurement import (
+    Measurement,
+    place_sensors,
+    sample_distortion,
+    sample_times,
+    sensor_noise,
+    shoulder_drift,
+    vibration,
+)
+from visprim.datasets.stimuli import STIMULI, Stimulus, random_stimulus
+from visprim.datasets.subjects import Subject, perform, sample_subject
+from visprim.trial import Trial, Truth
+
+# Independent random streams: SeedSequence(seed, spawn_key=(domain, ...)). Subject s and
+# trial (s, m) get the same numbers whatever n_subjects / n_stimuli are.
+_SUBJECT, _TRIAL, _STIMULUS, _SESSION = 0, 1, 2, 3
+_MOTION, _TIMES, _DRIFT, _SENSORS = 0, 1, 2, 3
+
+
+def _rng(seed: int, *key: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=key))
+
+
+def _check_count(name: str, value: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+        raise ValueError(f"{name} must be a positive integer, got {value!r}")
+    return int(value)
+
+
+def stimuli(n_stimuli: int = 20, seed: int = 0) -> list[Stimulus]:
+    """The first ``n_stimuli`` stimuli: the 20 of :data:`STIMULI`, then random ones."""
+    n_stimuli = _check_count("n_stimuli", n_stimuli)
+    out = list(STIMULI[:n_stimuli])
+    for m in range(len(out), n_stimuli):
+        out.append(random_stimulus(_rng(seed, _STIMULUS, m), m))
+    return out
+
+
+def subjects(n_subjects: int = 11, seed: int = 0) -> list[Subject]:
+    """The first ``n_subjects`` subjects for ``seed``."""
+    n_subjects = _check_count("n_subjects", n_subjects)
+    return [sample_subject(s, _rng(seed, _SUBJECT, s)) for s in range(n_subjects)]
+
+
+def generate_trial(
+    subject: Subject,
+    stimulus: Stimulus,
+    stimulus_index: int,
+    seed: int = 0,
+    *,
+    noise: bool = True,
+    skin_offsets: bool = True,
+    drift: bool = True,
+    timing_jitter: bool = True,
+    measurement: Measurement | None = None,
+) -> Trial:
+    """One subject's imitation of one stimulus, measured (see :func:`imitation_experiment`)."""
+    m = measurement or Measurement()
+    key = (_TRIAL, subject.index, stimulus_index)
+    motion = perform(stimulus, subject, _rng(seed, *key, _MOTION))
+    times = sample_times(motion.duration, _rng(seed, *key, _TIMES) if timing_jitter else None, m)
+    angles = motion.angles(times)
+    body = subject.body
+    offsets = subject.skin_offsets if skin_offsets else None
+    sensors, joints = place_sensors(angles, body.lengths, offsets)
+    origin = np.broadcast_to(np.asarray(body.shoulder), (times.size, 3)).copy()
+    if drift:
+        origin += shoulder_drift(times, _rng(seed, *key, _DRIFT), m)
+    markers = sensors + origin[:, None, :]
+    true_joints = joints[:, :3] + origin[:, None, :]
+    if noise:
+        rng = _rng(seed, *key, _SENSORS)
+        speed = np.linalg.norm(np.gradient(sensors, times, axis=0), axis=2)
+        field = sample_distortion(_rng(seed, _SESSION, subject.index), m)
+        markers = markers + field(markers)
+        markers = markers + vibration(times, speed, rng, m)
+        markers = markers + sensor_noise(markers.shape, rng, m)
+    truth = Truth(
+        angles=angles,
+        boundaries=motion.boundaries,
+        labels=motion.labels,
+        repetitions=stimulus.repetitions,
+    )
+    lengths = body.lengths
+    return Trial(
+        times=times,
+        markers=markers,
+        name=f"s{subject.index:02d}_m{stimulus_index:02d}",
+        subject=subject.index,
+        stimulus=stimulus_index,
+        repetitions=stimulus.repetitions,
+        truth=truth,
+        meta={
+            "generator": "visprim.datasets",
+            "seed": seed,
+            "frame_period_s": m.frame_period_s,
+            "rate_hz": 1.0 / m.frame_period_s,
+            "stimulus_name": stimulus.name,
+            "height_m": body.height,
+            "segment_lengths_m": {
+                "upper_arm": lengths.upper_arm,
+                "forearm": lengths.forearm,
+                "hand": lengths.hand,
+                "hand_marker": lengths.hand_marker,
+            },
+            "noise": noise,
+            "skin_offsets": skin_offsets,
+            "drift": drift,
+            "true_joints": true_joints,
+        },
+    )
+
+
+def imitation_experiment(
+    n_subjects: int = 11,
+    n_stimuli: int = 20,
+    seed: int = 0,
+    *,
+    noise: bool = True,
+    skin_offsets: bool = True,
+    drift: bool = True,
+    timing_jitter: bool = True,
+    measurement: Measurement | None = None,
+) -> list[Trial]:
+    """Generate the imitation experiment: every subject imitating every stimulus.
+
+    Parameters
+    ----------
+    n_subjects, n_stimuli : int
+        Subjects (default 11) and stimuli (default 20; beyond the 20 of
+        :data:`~visprim.datasets.stimuli.STIMULI`, random valid stimuli are added).
+    seed : int
+        Non-negative seed. Every (subject, stimulus) trial has its own random streams, so
+        subject ``s`` imitating stimulus ``m`` is the same trial for any ``n_subjects > s``
+        and ``n_stimuli > m``.
+    noise : bool
+        Add the tracker's error (smooth field distortion plus white jitter, ≈2 mm 3-D RMS
+        together) and sensor vibration (7–12 Hz). With
+        ``noise=False`` and ``skin_offsets=False`` the markers lie exactly on the points
+        inverse kinematics assumes (relative to the shoulder).
+    skin_offsets : bool
+        Place the sensors off the bone axis as skin-mounted sensors are.
+    drift : bool
+        Add the slow shoulder drift (a common translation of all four markers).
+    timing_jitter : bool
+        Jitter the 34 ms sample instants (SD 0.3 ms).
+    measurement : Measurement, optional
+        Override the measurement parameters.
+
+    Returns
+    -------
+    list of Trial
+        Ordered by subject, then stimulus; ``name`` ``"sSS_mMM"`` (0-based ids), integer
+        ``subject`` and ``stimulus``, ``repetitions``, ``truth`` (angles (T, 4) rad,
+        boundaries s, labels, repetitions) and ``meta`` (frame period, segment lengths in
+        m, the noise-free joint centres ``true_joints`` (T, 3, 3) in m, ...).
+    """
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    seed = int(seed)
+    subs = subjects(n_subjects, seed)
+    stims = stimuli(n_stimuli, seed)
+    return [
+        generate_trial(
+            subject,
+            stim,
+            m,
+            seed,
+            noise=noise,
+            skin_offsets=skin_offsets,
+            drift=drift,
+            timing_jitter=timing_jitter,
+            measurement=measurement,
+        )
+        for subject in subs
+        for m, stim in enumerate(stims)
+    ]
+
+
+def export_experiment(
+    out_dir: str | Path, n_subjects: int = 11, n_stimuli: int = 20, seed: int = 0
+) -> list[Path]:
+    """Write the experiment as marker CSV files (one per trial) with truth sidecars.
+
+    Writes ``out_dir/<name>.csv`` (see :mod:`visprim.markers_csv`) and
+    ``out_dir/<name>.truth.json`` per trial; returns the CSV paths in trial order.
+    """
+    from visprim.markers_csv import write_marker_csv
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    trials = imitation_experiment(n_subjects, n_stimuli, seed)
+    return [write_marker_csv(out / f"{t.name}.csv", t) for t in trials]

@@ -1,0 +1,356 @@
+"""Real motion capture in: BVH, ASF/AMC, C3D and the marker CSV → :class:`visprim.Trial`.
+
+>>> from visprim.io import read, read_many
+>>> trial = read("wave.bvh")                      # right arm, format from the extension
+>>> trial = read("05_02.amc", skeleton="05.asf", rate=120)
+>>> trials = read_many(["../shared/data"], recursive=True, resample=0.034)
+
+Every trial is in the common frame of :mod:`visprim.trial` — metres, +z up, the subject facing
++x at the first frame (when the torso is known), +y to the subject's left — with
+
+* ``times`` in seconds from the first frame (or the file's own timestamps for CSV);
+* ``joints``: shoulder, elbow and wrist joint centres (skeleton joints, or centres estimated
+  from anatomical landmarks; see :mod:`visprim.io.c3d`);
+* ``markers``: the method's four sensors. By default (``markers="virtual"``) they are placed
+  as inverse kinematics assumes: mid upper arm = (shoulder + elbow) / 2, mid forearm =
+  (elbow + wrist) / 2, wrist = wrist centre, finger = middle-finger knuckle (or the hand end
+  extrapolated from the hand joint, see :mod:`visprim.io.assemble`). C3D files with their own
+  sensors can keep them with ``markers="file"``;
+* ``body_frame``: the torso's orientation (BVH/AMC: rigidly attached to the chest joint;
+  C3D: thorax or shoulder markers), ``None`` when the source has no torso;
+* ``name`` (file stem, ``_part2`` etc. when long gaps split a recording), ``source`` (path),
+  ``subject`` (C3D subject prefix), ``stimulus`` (Bandai content label), ``meta`` (rate,
+  units and up axis in the file and how they were decided, joint/marker names used, gaps
+  filled, style/take labels...).
+
+Errors are :class:`ReadError` subclasses (``ValueError``) naming the file and the problem;
+bad arguments raise ``ValueError`` naming the argument.
+"""
+
+from __future__ import annotations
+
+import glob
+import os
+import re
+import warnings
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from visprim.io.assemble import ArmRecording, align_heading, check_up_axis
+from visprim.io.errors import (
+    FrameCountError,
+    GapError,
+    MalformedFileError,
+    MissingPointError,
+    ReadError,
+    TruncatedFileError,
+    UnknownFormatError,
+)
+from visprim.io.gaps import check_gap_options
+from visprim.io.presets import MARKER_PRESETS, RIG_PRESETS, check_arm
+from visprim.io.resample import resample_trial
+from visprim.trial import Trial
+
+__all__ = [
+    "FORMATS",
+    "MARKER_PRESETS",
+    "RIG_PRESETS",
+    "FrameCountError",
+    "GapError",
+    "MalformedFileError",
+    "MissingPointError",
+    "ReadError",
+    "TruncatedFileError",
+    "UnknownFormatError",
+    "labels_from_name",
+    "read",
+    "read_many",
+    "read_pieces",
+    "resample_trial",
+]
+
+#: Supported extensions (lower case) → format name.
+FORMATS: dict[str, str] = {".bvh": "bvh", ".amc": "amc", ".c3d": "c3d", ".csv": "csv"}
+
+_BANDAI = re.compile(r"^dataset-(?P<dataset>\d+)_(?P<content>[a-z0-9-]+)_(?P<style>[a-z]+)_(?P<take>\d+)$")
+
+
+def labels_from_name(stem: str) -> dict[str, Any]:
+    """Labels encoded in a file name. Bandai-Namco: ``dataset-2_wave-right-hand_normal_001`` →
+    ``{"dataset": 2, "content": "wave-right-hand", "style": "normal", "take": 1}``; other
+    names → ``{}``."""
+    m = _BANDAI.match(stem)
+    if m is None:
+        return {}
+    return {
+        "dataset": int(m["dataset"]),
+        "content": m["content"],
+        "style": m["style"],
+        "take": int(m["take"]),
+    }
+
+
+def _format_of(path: Path) -> str:
+    ext = path.suffix.lower()
+    if ext == ".asf":
+        raise UnknownFormatError(
+            path,
+            "an .asf file is a skeleton without motion; read the .amc file "
+            "(its skeleton is found next to it, or pass skeleton=...)",
+        )
+    if ext not in FORMATS:
+        raise UnknownFormatError(
+            path,
+            f"unknown extension {path.suffix or '(none)'!r}; supported: "
+            + ", ".join(sorted(FORMATS)),
+        )
+    return FORMATS[ext]
+
+
+def read_pieces(
+    path: str | os.PathLike[str],
+    arm: str = "right",
+    *,
+    skeleton: str | os.PathLike[str] | None = None,
+    rate: float | None = None,
+    mapping: Mapping[str, str | Sequence[str]] | None = None,
+    preset: str | None = None,
+    up_axis: str | None = None,
+    units: str | float | None = None,
+    markers: str = "virtual",
+    max_gap: float = 0.2,
+    on_gap: str = "split",
+    gap_method: str = "cubic",
+    min_duration: float = 0.5,
+    resample: float | None = None,
+    repetitions: int | None = None,
+    mirror: bool = False,
+) -> list[Trial]:
+    """Read one recording as a list of trials (several when long gaps split it).
+
+    Parameters
+    ----------
+    path : path of a .bvh, .amc, .c3d or .csv file
+    arm : 'right' (default) or 'left'
+    skeleton : AMC only: the .asf (default: same stem, else the only .asf in the folder,
+        else the .asf whose stem starts the AMC's stem)
+    rate : AMC only: frames per second (default 120, CMU; AMC does not store it)
+    mapping : explicit names per role, e.g. ``{"shoulder": "RightArm", "elbow":
+        "RightForeArm", "wrist": "RightHand"}`` (BVH/ASF) or ``{"acromion": "RSHO",
+        "elbow": ["EPL", "EPM"], "wrist": ["WRA", "WRB"], "finger": "FIN"}`` (C3D); roles are
+        listed in :mod:`visprim.io.presets`. Overrides the preset's names.
+    preset : a name from :data:`RIG_PRESETS` (BVH/AMC) or :data:`MARKER_PRESETS` (C3D);
+        default: the first preset whose arm joints/markers are all in the file
+    up_axis : the file's vertical axis ('+y', '+z', '-x', ...). Default: +Y for BVH/AMC,
+        ``POINT:Y_SCREEN`` or anatomy for C3D (see :mod:`visprim.io.c3d`)
+    units : BVH only: the length unit ('m', 'cm', 'mm', 'in' or metres per unit); default
+        detected from the upper-arm length
+    markers : 'virtual' (default) or 'file' (C3D: the file's own sensor markers)
+    max_gap : seconds; C3D gaps up to this long are filled (``gap_method``: 'cubic',
+        'pchip' or 'linear'), longer ones handled by ``on_gap``: 'split' (cut into pieces),
+        'longest' (keep the longest piece) or 'raise' (:class:`GapError`); pieces shorter
+        than ``min_duration`` seconds are dropped with a warning. See :mod:`visprim.io.gaps`
+    resample : new frame period in seconds (e.g. 0.034), or None to keep the file's
+    repetitions : ``Trial.repetitions`` (default 1; CSV: the file's value)
+    mirror : reflect left ↔ right so that a left arm looks like a right arm (for the
+        right-arm angle convention); default False
+    """
+    p = Path(path)
+    fmt = _format_of(p)
+    arm = check_arm(arm)
+    check_gap_options(max_gap, on_gap, gap_method)
+    if not p.is_file():
+        raise ReadError(p, "no such file" if not p.exists() else "not a regular file")
+    if up_axis is not None:
+        check_up_axis(up_axis)
+    for name, value, formats in (
+        ("skeleton", skeleton, ("amc",)),
+        ("rate", rate, ("amc",)),
+        ("units", units, ("bvh",)),
+    ):
+        if value is not None and fmt not in formats:
+            raise ValueError(f"{name}= applies to {'/'.join(formats)} files, not {p.name}")
+    if markers not in ("virtual", "file"):
+        raise ValueError(f"markers must be 'virtual' or 'file', got {markers!r}")
+    if markers == "file" and fmt != "c3d":
+        raise ValueError(f"markers='file' applies to C3D files, not {p.name}")
+    if repetitions is not None and int(repetitions) < 1:
+        raise ValueError(f"repetitions must be >= 1, got {repetitions!r}")
+
+    if fmt == "csv":
+        if mirror:
+            raise ValueError("mirror=True is not supported for the marker CSV (one right arm)")
+        trials = [_read_csv(p, arm, repetitions)]
+    else:
+        recs = _read_arm(
+            p, fmt, arm, skeleton=skeleton, rate=rate, mapping=mapping, preset=preset,
+            up_axis=up_axis, units=units, markers=markers, max_gap=max_gap, on_gap=on_gap,
+            gap_method=gap_method, min_duration=min_duration,
+        )
+        heading = align_heading(recs)
+        if mirror:
+            for r in recs:
+                r.mirror()
+        labels = labels_from_name(p.stem)
+        trials = []
+        for i, rec in enumerate(recs):
+            meta = {
+                **rec.meta,
+                **labels,
+                "arm": arm,
+                "mirrored": bool(mirror),
+                "heading_deg": heading,
+                "piece": [i + 1, len(recs)],
+            }
+            trials.append(
+                Trial(
+                    times=rec.times,
+                    markers=rec.markers(markers),
+                    joints=rec.joints,
+                    body_frame=rec.body_frame,
+                    name=p.stem if len(recs) == 1 else f"{p.stem}_part{i + 1}",
+                    subject=rec.meta.get("subject"),
+                    stimulus=labels.get("content"),
+                    repetitions=1 if repetitions is None else int(repetitions),
+                    source=str(p),
+                    meta=meta,
+                )
+            )
+    if resample is not None:
+        trials = [resample_trial(t, resample) for t in trials]
+    return trials
+
+
+def read(path: str | os.PathLike[str], arm: str = "right", **options: Any) -> Trial:
+    """Read one recording as one :class:`~visprim.trial.Trial`.
+
+    Takes the options of :func:`read_pieces`. If long gaps split the recording into several
+    pieces, raises :class:`GapError` (use :func:`read_pieces` / :func:`read_many` for all
+    pieces, or ``on_gap="longest"``).
+    """
+    trials = read_pieces(path, arm, **options)
+    if len(trials) > 1:
+        spans = ", ".join(f"{t.times[0]:.2f}–{t.times[-1]:.2f} s" for t in trials)
+        raise GapError(
+            path,
+            f"long gaps split the recording into {len(trials)} pieces ({spans}); use "
+            "read_pieces() or read_many() to get them all, or on_gap='longest'",
+        )
+    return trials[0]
+
+
+_FORMAT_OPTIONS = {"skeleton": "amc", "rate": "amc", "units": "bvh"}
+
+
+def _expand(sources: str | os.PathLike[str] | Iterable[str | os.PathLike[str]], recursive: bool) -> list[Path]:
+    items = [sources] if isinstance(sources, (str, os.PathLike)) else list(sources)
+    out: list[Path] = []
+    for item in items:
+        p = Path(item)
+        if p.is_dir():
+            walk = p.rglob("*") if recursive else p.iterdir()
+            found = sorted(f for f in walk if f.is_file() and f.suffix.lower() in FORMATS)
+            if not found:
+                raise ReadError(
+                    p, f"no recordings ({', '.join(sorted(FORMATS))}) in this folder"
+                    + ("" if recursive else " (recursive=True searches subfolders)")
+                )
+            out.extend(found)
+        elif p.exists():
+            out.append(p)
+        elif any(ch in str(item) for ch in "*?["):
+            hits = sorted(Path(h) for h in glob.glob(str(item), recursive=recursive))
+            files = [h for h in hits if h.is_file() and h.suffix.lower() in FORMATS]
+            if not files:
+                raise ReadError(str(item), "the pattern matches no recording")
+            out.extend(files)
+        else:
+            raise ReadError(p, "no such file or folder")
+    seen: set[Path] = set()
+    unique = []
+    for f in out:
+        key = f.resolve()
+        if key not in seen:
+            seen.add(key)
+            unique.append(f)
+    return unique
+
+
+def read_many(
+    sources: str | os.PathLike[str] | Iterable[str | os.PathLike[str]],
+    arm: str = "right",
+    *,
+    recursive: bool = False,
+    on_error: str = "raise",
+    **options: Any,
+) -> list[Trial]:
+    """Read files, folders and glob patterns into one flat list of trials.
+
+    Folders contribute their .bvh/.amc/.c3d/.csv files (sorted; ``recursive=True`` for
+    subfolders; other files such as README.md, .asf skeletons and licences are skipped);
+    patterns are expanded with :func:`glob.glob`. Recordings split by long gaps contribute
+    every piece. Options are those of :func:`read_pieces`; format-specific ones (``skeleton``,
+    ``rate`` for AMC, ``units`` for BVH) are only passed to files of that format.
+    ``on_error="warn"`` skips unreadable files with a warning instead of raising.
+    """
+    if on_error not in ("raise", "warn"):
+        raise ValueError(f"on_error must be 'raise' or 'warn', got {on_error!r}")
+    trials: list[Trial] = []
+    for path in _expand(sources, recursive):
+        fmt = FORMATS[path.suffix.lower()]
+        opts = {
+            k: v for k, v in options.items() if k not in _FORMAT_OPTIONS or _FORMAT_OPTIONS[k] == fmt
+        }
+        try:
+            trials.extend(read_pieces(path, arm, **opts))
+        except ReadError as exc:
+            if on_error == "raise":
+                raise
+            warnings.warn(f"skipped: {exc}", stacklevel=2)
+    return trials
+
+
+def _read_arm(p: Path, fmt: str, arm: str, **kw: Any) -> list[ArmRecording]:
+    if fmt == "bvh":
+        from visprim.io.bvh import read_bvh_arm
+
+        return [
+            read_bvh_arm(
+                p, arm, preset=kw["preset"], mapping=kw["mapping"], up_axis=kw["up_axis"],
+                units=kw["units"],
+            )
+        ]
+    if fmt == "amc":
+        from visprim.io.asfamc import read_amc_arm
+
+        return [
+            read_amc_arm(
+                p, arm, skeleton=kw["skeleton"], rate=kw["rate"], preset=kw["preset"],
+                mapping=kw["mapping"], up_axis=kw["up_axis"],
+            )
+        ]
+    from visprim.io.c3d import read_c3d_arm
+
+    return read_c3d_arm(
+        p, arm, preset=kw["preset"], mapping=kw["mapping"], up_axis=kw["up_axis"],
+        markers=kw["markers"], max_gap=kw["max_gap"], on_gap=kw["on_gap"],
+        gap_method=kw["gap_method"], min_duration=kw["min_duration"],
+    )
+
+
+def _read_csv(p: Path, arm: str, repetitions: int | None) -> Trial:
+    if arm != "right":
+        raise ValueError(f"{p}: the marker CSV holds one (right) arm; arm={arm!r} is not available")
+    try:
+        from visprim.markers_csv import read_marker_csv
+    except ImportError as exc:  # pragma: no cover - the module ships with visprim
+        raise ReadError(p, f"marker CSV support is unavailable ({exc})") from None
+    try:
+        return read_marker_csv(p, repetitions=repetitions)
+    except ReadError:
+        raise
+    except ValueError as exc:
+        msg = str(exc)
+        prefix = f"{p}: "
+        raise MalformedFileError(p, msg[len(prefix):] if msg.startswith(prefix) else msg) from exc

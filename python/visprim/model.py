@@ -1,0 +1,537 @@
+"""The learned primitives: :class:`PrimitiveModel`, a scikit-learn style estimator.
+
+``fit(trials)`` runs the whole method of Fod, Matarić & Jenkins on a list of
+:class:`~visprim.trial.Trial`:
+
+1. inverse kinematics → 4 angles (radians, :mod:`visprim.ik`);
+2. zero-phase Butterworth low-pass (:mod:`visprim.filtering`);
+3. segmentation, SEG-2 (default) or SEG-1 (:mod:`visprim.segment`);
+4. each segment resampled to ``n_samples`` per angle → a ``4 n``-D vector
+   (:mod:`visprim.vectors`);
+5. PCA (:mod:`visprim.pca`), keeping ``n_components`` eigenvectors ``E_f``;
+6. k-means with ``n_clusters`` clusters in the f-D projection space: the primitives.
+
+Everything numeric runs in the Rust kernels (:mod:`visprim.kernels`). Units: seconds and
+radians throughout the API; degrees only in reports (and the ``zvc_threshold_deg`` option).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from os import PathLike
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from sklearn.base import BaseEstimator
+from sklearn.exceptions import NotFittedError
+
+from visprim import kernels
+from visprim.errors import DEFAULT_F_VALUES, DEFAULT_K_VALUES, ErrorTables, compute_error_tables
+from visprim.pca import PCABasis, fit_pca
+from visprim.preprocess import PreparedCorpus, prepare_corpus, seg2_partition
+from visprim.trial import Trial
+from visprim.vectors import SegmentVectors, corpus_vectors, stretch, to_curves
+
+Source = Literal["projection", "cluster"]
+
+__all__ = ["PrimitiveModel"]
+
+
+class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
+    """Movement primitives learned from arm trials (PCA + k-means of segment vectors).
+
+    Parameters
+    ----------
+    filter_order : int
+        Butterworth order of the zero-phase low-pass (default 10).
+    cutoff : float
+        Normalised cutoff of the low-pass, a fraction of the Nyquist frequency of the frame
+        rate, in (0, 1) (default 0.25).
+    segmentation : {"seg2", "seg1"}
+        Which segmentation produces the training segments (default "seg2").
+    zvc_threshold_deg : float
+        Significant-movement threshold of the zero-velocity crossings, **degrees** (default
+        5.0; used by SEG-1).
+    window : float
+        SEG-1 window in seconds: ZVCs of different angles closer than this form one event
+        (default 0.3).
+    seg2_threshold : float or None
+        SEG-2 constant ``c`` on ``z(t) = Σ θ̇ᵢ²`` in (rad/s)²; ``None`` (default) tunes it on
+        the training corpus so that every trial yields at least as many segments as its
+        ``repetitions``.
+    n_samples : int
+        Samples per angle in a segment vector (default 100; vectors are ``4 n_samples``-D).
+    n_components : int
+        Eigenvectors kept, ``f`` (default 30).
+    n_clusters : int
+        k-means clusters = primitives, ``k`` (default 30).
+    n_init, max_iter, tol : int, int, float
+        k-means restarts, iterations per restart and convergence tolerance (scikit-learn's
+        meaning of ``tol``).
+    seed : int
+        Seed of k-means (results are deterministic for a seed).
+
+    Attributes (after ``fit``)
+    --------------------------
+    mean_ : (d,) radians — the mean segment vector ``s̄``.
+    eigenvalues_ : (d,) rad², descending — eigenvalues of the covariance K (divisor N).
+    eigenvectors_ : (d, d) — unit eigenvectors as columns.
+    components_ : (d, f) — ``E_f``, the first ``n_components`` eigenvectors.
+    cluster_centers_ : (k, f) — primitive centres in the projection space.
+    labels_ : (N,) int — primitive of each training segment.
+    inertia_ : float — k-means inertia (Σ squared distances, rad²).
+    segment_trial_, segment_starts_, segment_ends_ : (N,) — where each training segment came
+        from (trial index, start and end in seconds).
+    primitive_durations_ : (k,) seconds — mean duration of each primitive's member segments.
+    seg2_threshold_ : float or None — the SEG-2 constant used (tuned or given).
+    trial_names_ : list of str — names of the training trials.
+    training_vectors_ : (N, d) or None — the training segment vectors (kept in memory after
+        ``fit``; not written to the model file, so ``None`` after :meth:`load`).
+    error_tables_ : ErrorTables or None — Tables 1–3 once :meth:`error_table` ran (saved).
+    training_source_ : dict — how to get the training trials again (for reports).
+    """
+
+    def __init__(
+        self,
+        *,
+        filter_order: int = 10,
+        cutoff: float = 0.25,
+        segmentation: str = "seg2",
+        zvc_threshold_deg: float = 5.0,
+        window: float = 0.3,
+        seg2_threshold: float | None = None,
+        n_samples: int = 100,
+        n_components: int = 30,
+        n_clusters: int = 30,
+        n_init: int = 10,
+        max_iter: int = 300,
+        tol: float = 1e-4,
+        seed: int = 0,
+    ) -> None:
+        self.filter_order = filter_order
+        self.cutoff = cutoff
+        self.segmentation = segmentation
+        self.zvc_threshold_deg = zvc_threshold_deg
+        self.window = window
+        self.seg2_threshold = seg2_threshold
+        self.n_samples = n_samples
+        self.n_components = n_components
+        self.n_clusters = n_clusters
+        self.n_init = n_init
+        self.max_iter = max_iter
+        self.tol = tol
+        self.seed = seed
+
+    # ------------------------------------------------------------------ validation
+
+    def _validate_params(self) -> None:  # noqa: C901 (a flat list of checks)
+        def bad(name: str, why: str) -> ValueError:
+            return ValueError(f"PrimitiveModel parameter {name}={getattr(self, name)!r}: {why}")
+
+        def is_int(v: Any) -> bool:
+            return isinstance(v, (int, np.integer)) and not isinstance(v, bool)
+
+        if not is_int(self.filter_order) or self.filter_order < 1:
+            raise bad("filter_order", "must be an integer >= 1")
+        if not isinstance(self.cutoff, (int, float)) or not 0.0 < float(self.cutoff) < 1.0:
+            raise bad("cutoff", "must be a number in (0, 1) (fraction of Nyquist)")
+        if self.segmentation not in ("seg1", "seg2"):
+            raise bad("segmentation", "must be 'seg1' or 'seg2'")
+        if not np.isfinite(self.zvc_threshold_deg) or self.zvc_threshold_deg < 0:
+            raise bad("zvc_threshold_deg", "must be a finite number of degrees >= 0")
+        if not np.isfinite(self.window) or self.window <= 0:
+            raise bad("window", "must be a positive number of seconds")
+        if self.seg2_threshold is not None and not (
+            np.isfinite(self.seg2_threshold) and self.seg2_threshold > 0
+        ):
+            raise bad("seg2_threshold", "must be None (tune it) or a positive number (rad/s)^2")
+        if not is_int(self.n_samples) or self.n_samples < 2:
+            raise bad("n_samples", "must be an integer >= 2")
+        d = 4 * int(self.n_samples)
+        if not is_int(self.n_components) or not 1 <= self.n_components <= d:
+            raise bad("n_components", f"must be an integer in [1, 4 * n_samples = {d}]")
+        if not is_int(self.n_clusters) or self.n_clusters < 1:
+            raise bad("n_clusters", "must be an integer >= 1")
+        if not is_int(self.n_init) or self.n_init < 1:
+            raise bad("n_init", "must be an integer >= 1")
+        if not is_int(self.max_iter) or self.max_iter < 1:
+            raise bad("max_iter", "must be an integer >= 1")
+        if not np.isfinite(self.tol) or self.tol < 0:
+            raise bad("tol", "must be a finite number >= 0")
+        if not is_int(self.seed) or self.seed < 0:
+            raise bad("seed", "must be an integer >= 0")
+
+    def _check_fitted(self) -> None:
+        if not hasattr(self, "cluster_centers_"):
+            raise NotFittedError(
+                "This PrimitiveModel is not fitted yet; call fit(trials) or PrimitiveModel.load(path)"
+            )
+
+    # ------------------------------------------------------------------ fitting
+
+    def prepare(self, trials: Sequence[Trial], *, tune_seg2: bool | None = None) -> PreparedCorpus:
+        """IK, low-pass and segmentation of ``trials`` with this model's settings.
+
+        Before ``fit`` (or with ``tune_seg2=True``) SEG-2's constant is tuned on these
+        trials (unless ``seg2_threshold`` is given); after ``fit`` the fitted constant
+        ``seg2_threshold_`` is reused so that new trials are cut like the training ones.
+        """
+        if tune_seg2 is None:
+            tune_seg2 = not hasattr(self, "seg2_threshold_")
+        threshold = self.seg2_threshold
+        if not tune_seg2 and getattr(self, "seg2_threshold_", None) is not None:
+            threshold = self.seg2_threshold_
+        return prepare_corpus(
+            trials,
+            filter_order=int(self.filter_order),
+            cutoff=float(self.cutoff),
+            segmentation=str(self.segmentation),
+            zvc_threshold_deg=float(self.zvc_threshold_deg),
+            window=float(self.window),
+            seg2_threshold=threshold,
+        )
+
+    def vectorize(self, corpus: PreparedCorpus) -> SegmentVectors:
+        """Segment vectors (N, 4 n_samples) of a prepared corpus (radians)."""
+        seg = corpus.segmentation
+        if seg.n_segments == 0:
+            raise ValueError(
+                f"no {seg.method.upper()} segment found in {corpus.n_trials} trial(s) "
+                f"({', '.join(corpus.names[:3])}{', ...' if corpus.n_trials > 3 else ''})"
+            )
+        starts, ends = seg.global_frames()
+        last = float(corpus.angles_all.shape[0] - 1)
+        vectors = kernels.resample_segments(
+            corpus.angles_all,
+            np.clip(starts, 0.0, last),
+            np.clip(ends, 0.0, last),
+            n=int(self.n_samples),
+        )
+        return SegmentVectors(
+            vectors=np.asarray(vectors),
+            trial=seg.trial,
+            starts=seg.start,
+            ends=seg.end,
+            n_samples=int(self.n_samples),
+        )
+
+    def fit(
+        self,
+        trials: Sequence[Trial],
+        y: Any = None,
+        *,
+        source: dict[str, Any] | None = None,
+    ) -> PrimitiveModel:
+        """Learn the primitives from ``trials`` (a list of :class:`~visprim.trial.Trial`).
+
+        ``y`` is ignored (scikit-learn convention). ``source`` optionally records how to get
+        the trials again (e.g. ``{"kind": "generated", ...}`` or ``{"kind": "files",
+        "paths": [...]}``) so that ``visprim report`` can redraw the trial figures.
+
+        Raises
+        ------
+        ValueError
+            Bad parameters, an empty corpus, fewer segments than ``n_clusters`` (or than 2).
+        """
+        self._validate_params()
+        trials = _as_trials(trials)
+        for attr in [a for a in vars(self) if a.endswith("_") and not a.startswith("_")]:
+            delattr(self, attr)
+        corpus = self.prepare(trials, tune_seg2=True)
+        sv = self.vectorize(corpus)
+        return self._fit_vectors(sv, corpus, source=source)
+
+    def _fit_vectors(
+        self,
+        sv: SegmentVectors,
+        corpus: PreparedCorpus | None = None,
+        *,
+        source: dict[str, Any] | None = None,
+    ) -> PrimitiveModel:
+        n = len(sv)
+        if n < 2:
+            raise ValueError(f"fit: the corpus yielded {n} segment(s); PCA needs at least 2")
+        if int(self.n_clusters) > n:
+            raise ValueError(
+                f"fit: n_clusters={self.n_clusters} exceeds the number of segments found ({n}); "
+                "lower n_clusters or give more trials"
+            )
+        basis = fit_pca(sv.vectors)
+        f = int(self.n_components)
+        p = basis.project(sv.vectors, f)
+        km = kernels.kmeans(
+            np.ascontiguousarray(p),
+            int(self.n_clusters),
+            n_init=int(self.n_init),
+            max_iter=int(self.max_iter),
+            tol=float(self.tol),
+            seed=int(self.seed),
+        )
+        self.mean_ = basis.mean
+        self.eigenvalues_ = basis.eigenvalues
+        self.eigenvectors_ = basis.eigenvectors
+        self.n_training_segments_ = n
+        self.cluster_centers_ = np.asarray(km.centers, dtype=np.float64)
+        self.labels_ = np.asarray(km.labels, dtype=np.int64)
+        self.inertia_ = float(km.inertia)
+        self.n_iter_ = int(km.n_iter)
+        self.segment_trial_ = sv.trial
+        self.segment_starts_ = sv.starts
+        self.segment_ends_ = sv.ends
+        self.primitive_durations_ = _mean_durations(
+            sv.durations, self.labels_, int(self.n_clusters)
+        )
+        self.seg2_threshold_ = corpus.seg2_threshold if corpus is not None else None
+        self.trial_names_ = list(corpus.names) if corpus is not None else []
+        self.training_vectors_: NDArray[np.float64] | None = sv.vectors
+        self.training_projections_: NDArray[np.float64] | None = p
+        self.error_tables_: ErrorTables | None = None
+        self.training_source_ = dict(source or {})
+        return self
+
+    # ------------------------------------------------------------------ properties
+
+    @property
+    def basis_(self) -> PCABasis:
+        """The PCA basis (mean, eigenvalues, eigenvectors) as a :class:`PCABasis`."""
+        self._check_fitted()
+        return PCABasis(self.mean_, self.eigenvalues_, self.eigenvectors_, self.n_training_segments_)
+
+    @property
+    def components_(self) -> NDArray[np.float64]:
+        """``E_f``: the first ``n_components`` eigenvectors as columns, (d, f)."""
+        self._check_fitted()
+        return self.eigenvectors_[:, : int(self.n_components)]
+
+    @property
+    def n_primitives(self) -> int:
+        """Number of primitives k (cluster centres)."""
+        self._check_fitted()
+        return int(self.cluster_centers_.shape[0])
+
+    @property
+    def dim(self) -> int:
+        """Dimension of a segment vector, ``4 n_samples``."""
+        return 4 * int(self.n_samples)
+
+    # ------------------------------------------------------------------ transform / predict
+
+    def _vectors_of(self, X: ArrayLike | Sequence[Trial] | Trial) -> NDArray[np.float64]:
+        if isinstance(X, Trial) or (
+            isinstance(X, (list, tuple)) and len(X) > 0 and isinstance(X[0], Trial)
+        ):
+            return self.vectorize(self.prepare(_as_trials(X))).vectors
+        x = np.asarray(X, dtype=np.float64)
+        x = np.atleast_2d(x)
+        if x.ndim != 2 or x.shape[1] != self.dim:
+            raise ValueError(
+                f"expected segment vectors of shape (N, {self.dim}) or a list of Trial, "
+                f"got an array of shape {np.asarray(X).shape}"
+            )
+        if not np.all(np.isfinite(x)):
+            raise ValueError("segment vectors contain NaN or infinity")
+        return x
+
+    def transform(self, X: ArrayLike | Sequence[Trial] | Trial) -> NDArray[np.float64]:
+        """Projections ``p = E_fᵀ (s − s̄)``, shape (N, f).
+
+        ``X``: segment vectors (N, d) in radians, or trial(s), which are segmented with the
+        fitted settings first (segments in trial order).
+        """
+        self._check_fitted()
+        return (self._vectors_of(X) - self.mean_) @ self.components_
+
+    def predict(self, X: ArrayLike | Sequence[Trial] | Trial) -> NDArray[np.int64]:
+        """Primitive (nearest cluster centre in the projection space) of each segment."""
+        labels, _ = self.assign(self.transform(X))
+        return labels
+
+    def assign(self, projections: ArrayLike) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """Nearest centre of f-D projections: ``(labels (N,), squared distances (N,))``."""
+        self._check_fitted()
+        p = np.ascontiguousarray(np.atleast_2d(projections), dtype=np.float64)
+        if p.shape[1] != self.cluster_centers_.shape[1]:
+            raise ValueError(
+                f"projections must have {self.cluster_centers_.shape[1]} columns, got {p.shape}"
+            )
+        labels, dist = kernels.kmeans_predict(p, self.cluster_centers_)
+        return np.asarray(labels, dtype=np.int64), np.asarray(dist, dtype=np.float64)
+
+    # ------------------------------------------------------------------ reconstruction
+
+    def reconstruct(
+        self, X: ArrayLike | Sequence[Trial] | Trial, *, source: Source = "projection"
+    ) -> NDArray[np.float64]:
+        """Reconstructed segments as angle curves, shape (N, n_samples, 4), radians.
+
+        ``source="projection"``: ``s = E_f p + s̄`` with ``p`` the segment's projection;
+        ``source="cluster"``: ``s = E_f c + s̄`` with ``c`` the centre of its primitive.
+        Use :func:`visprim.vectors.stretch` (or :meth:`reconstruct_segment`) to put a curve
+        back on its segment's duration.
+        """
+        p = self.transform(X)
+        return to_curves(self._reconstruct_vectors(p, source))
+
+    def _reconstruct_vectors(self, p: NDArray[np.float64], source: Source) -> NDArray[np.float64]:
+        if source == "projection":
+            q = p
+        elif source == "cluster":
+            q = self.cluster_centers_[self.assign(p)[0]]
+        else:
+            raise ValueError(f"source must be 'projection' or 'cluster', got {source!r}")
+        return q @ self.components_.T + self.mean_
+
+    def primitive_angles(self, k: int) -> NDArray[np.float64]:
+        """Primitive ``k`` (its cluster centre) as 4 angle curves, (n_samples, 4) radians."""
+        self._check_fitted()
+        if not 0 <= int(k) < self.n_primitives:
+            raise IndexError(f"primitive index {k} out of range [0, {self.n_primitives})")
+        s = self.cluster_centers_[int(k)] @ self.components_.T + self.mean_
+        return to_curves(s)
+
+    def reconstruct_movement(
+        self,
+        trial: Trial,
+        *,
+        source: Source = "projection",
+        return_original: bool = False,
+    ) -> tuple[NDArray[np.float64], ...]:
+        """A whole movement rebuilt from its consecutive SEG-2 segments.
+
+        The trial is segmented with SEG-2 (with the fitted constant ``seg2_threshold_`` when
+        the model has one, else tuned on this trial), each segment is projected and
+        reconstructed (from its projection or its primitive, ``source``), stretched back to
+        its duration and evaluated at the trial's frame times.
+
+        Returns
+        -------
+        times : (m,) seconds — the trial's frame times covered by the segments.
+        angles : (m, 4) radians — the reconstruction.
+        original : (m, 4) radians — the low-passed IK angles at the same frames (only with
+            ``return_original=True``).
+        """
+        self._check_fitted()
+        times, angles, segments = seg2_partition(
+            trial,
+            filter_order=int(self.filter_order),
+            cutoff=float(self.cutoff),
+            threshold=getattr(self, "seg2_threshold_", None) or self.seg2_threshold,
+        )
+        sv = corpus_vectors([times], [angles], [segments], n_samples=int(self.n_samples))
+        curves = to_curves(self._reconstruct_vectors(self.transform(sv.vectors), source))
+        out_t, out_a, out_o = [], [], []
+        for j, (start, end) in enumerate(segments):
+            last = j == len(segments) - 1
+            mask = (times >= start) & ((times <= end) if last else (times < end))
+            if not np.any(mask):
+                continue
+            out_t.append(times[mask])
+            out_a.append(stretch(curves[j], start, end, times[mask]))
+            out_o.append(angles[mask])
+        if not out_t:
+            raise ValueError(f"trial {trial.name!r}: SEG-2 found no segment to reconstruct")
+        result = (np.concatenate(out_t), np.concatenate(out_a))
+        if return_original:
+            return (*result, np.concatenate(out_o))
+        return result
+
+    def reconstruct_segment(
+        self,
+        times: ArrayLike,
+        angles: ArrayLike,
+        start: float,
+        end: float,
+        *,
+        source: Source = "projection",
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """One segment [start, end] s of a (low-passed) angle trajectory, reconstructed and
+        stretched back to its duration: ``(frame times (m,) s, angles (m, 4) rad)``."""
+        self._check_fitted()
+        t = np.asarray(times, dtype=np.float64)
+        sv = corpus_vectors([t], [angles], [np.array([[start, end]])], n_samples=int(self.n_samples))
+        curve = to_curves(self._reconstruct_vectors(self.transform(sv.vectors), source))[0]
+        mask = (t >= start) & (t <= end)
+        return t[mask], stretch(curve, start, end, t[mask])
+
+    # ------------------------------------------------------------------ errors
+
+    def error_table(
+        self,
+        f_values: Sequence[int] = DEFAULT_F_VALUES,
+        k_values: Sequence[int] = DEFAULT_K_VALUES,
+    ) -> ErrorTables:
+        """Tables 1–3 (projection, clustering and total error; see :mod:`visprim.errors`)
+        on the training segments.
+
+        Needs the training vectors (kept after ``fit``). After :meth:`load` the tables saved
+        in the file are returned (only for the default rows).
+        """
+        self._check_fitted()
+        default = tuple(f_values) == DEFAULT_F_VALUES and tuple(k_values) == DEFAULT_K_VALUES
+        if default and getattr(self, "error_tables_", None) is not None:
+            return self.error_tables_  # type: ignore[return-value]
+        if getattr(self, "training_vectors_", None) is None:
+            raise ValueError(
+                "error_table: this model has no training vectors (it was loaded from a file); "
+                "only the tables saved with it (default rows) are available"
+                if default
+                else "error_table: this model was loaded from a file without its training "
+                "vectors; only the saved tables (default rows) are available"
+            )
+        tables = compute_error_tables(
+            self.basis_,
+            self.training_vectors_,  # type: ignore[arg-type]
+            int(self.n_components),
+            f_values=f_values,
+            k_values=k_values,
+            n_init=int(self.n_init),
+            max_iter=int(self.max_iter),
+            tol=float(self.tol),
+            seed=int(self.seed),
+            known={self.n_primitives: (self.cluster_centers_, self.labels_)},
+        )
+        if default:
+            self.error_tables_ = tables
+        return tables
+
+    # ------------------------------------------------------------------ persistence
+
+    def save(self, path: str | PathLike[str]) -> None:
+        """Write the fitted model to one file (see :mod:`visprim.modelfile`), atomically."""
+        from visprim.modelfile import save_model
+
+        self._check_fitted()
+        save_model(self, path)
+
+    @classmethod
+    def load(cls, path: str | PathLike[str]) -> PrimitiveModel:
+        """Read a model written by :meth:`save` (see :mod:`visprim.modelfile`)."""
+        from visprim.modelfile import load_model
+
+        return load_model(path)
+
+    def __sklearn_is_fitted__(self) -> bool:
+        return hasattr(self, "cluster_centers_")
+
+
+def _as_trials(trials: Sequence[Trial] | Trial) -> list[Trial]:
+    if isinstance(trials, Trial):
+        return [trials]
+    out = list(trials)
+    if not out:
+        raise ValueError("expected at least one Trial, got an empty sequence")
+    for i, t in enumerate(out):
+        if not isinstance(t, Trial):
+            raise TypeError(f"item {i} is a {type(t).__name__}, expected visprim.Trial")
+    return out
+
+
+def _mean_durations(durations: NDArray[np.float64], labels: NDArray[np.int64], k: int) -> NDArray[np.float64]:
+    """Mean member duration per cluster; a cluster without members gets the overall mean."""
+    counts = np.bincount(labels, minlength=k).astype(np.float64)
+    sums = np.bincount(labels, weights=durations, minlength=k)
+    overall = float(np.mean(durations))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.where(counts > 0, sums / np.maximum(counts, 1), overall)
+    return out

@@ -1,0 +1,138 @@
+"""Principal component analysis of segment vectors (paper §4: the eigenvectors of K).
+
+``K = (1/N) Σ (s − s̄)(s − s̄)ᵀ`` is computed by the Rust kernel
+:func:`visprim.kernels.covariance` (divisor N, as the paper) and decomposed by
+:func:`visprim.kernels.eigh` (eigenvalues in descending order, eigenvectors as columns with
+the kernel's fixed sign convention). Keeping the first ``f`` eigenvectors ``E_f`` gives the
+projections ``p = E_fᵀ (s − s̄)`` and the reconstructions ``s ≈ E_f p + s̄``.
+
+With divisor N, the mean squared reconstruction error over the training vectors equals the
+sum of the dropped eigenvalues ``Σ_{i > f} λ_i`` exactly (the projection error of Table 1).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from visprim import kernels
+
+
+@dataclass(frozen=True)
+class PCABasis:
+    """Mean and eigen-decomposition of the covariance of a set of vectors.
+
+    Attributes
+    ----------
+    mean : (d,) array
+        ``s̄`` (units of the vectors: radians for segment vectors).
+    eigenvalues : (d,) array, descending
+        Eigenvalues of K (squared units).
+    eigenvectors : (d, d) array
+        Unit eigenvectors as columns, in the order of ``eigenvalues``.
+    n_vectors : int
+        Number of vectors N the basis was computed from.
+    """
+
+    mean: NDArray[np.float64]
+    eigenvalues: NDArray[np.float64]
+    eigenvectors: NDArray[np.float64]
+    n_vectors: int
+
+    @property
+    def dim(self) -> int:
+        """Dimension d of the vectors."""
+        return int(self.mean.shape[0])
+
+    def _check_f(self, f: int) -> int:
+        f = int(f)
+        if not 1 <= f <= self.eigenvectors.shape[1]:
+            raise ValueError(
+                f"number of eigenvectors f must be in [1, {self.eigenvectors.shape[1]}], got {f}"
+            )
+        return f
+
+    def components(self, f: int) -> NDArray[np.float64]:
+        """``E_f``: the first ``f`` eigenvectors, shape (d, f)."""
+        return self.eigenvectors[:, : self._check_f(f)]
+
+    def project(self, vectors: ArrayLike, f: int) -> NDArray[np.float64]:
+        """``p = E_fᵀ (s − s̄)`` for each row of ``vectors`` (N, d) → (N, f)."""
+        x = _as_rows(vectors, self.dim, "vectors")
+        return (x - self.mean) @ self.components(f)
+
+    def reconstruct(self, projections: ArrayLike) -> NDArray[np.float64]:
+        """``s = E_f p + s̄`` for each row of ``projections`` (N, f) → (N, d)."""
+        p = np.asarray(projections, dtype=np.float64)
+        single = p.ndim == 1
+        p = np.atleast_2d(p)
+        out = p @ self.components(p.shape[1]).T + self.mean
+        return out[0] if single else out
+
+    def dropped_variance(self, f: int) -> float:
+        """Sum of the eigenvalues beyond the first ``f`` (the projection error, Table 1)."""
+        if not 0 <= int(f) <= self.eigenvalues.shape[0]:
+            raise ValueError(f"f must be in [0, {self.eigenvalues.shape[0]}], got {f}")
+        return float(np.sum(self.eigenvalues[int(f) :]))
+
+    def explained_fraction(self, f: int) -> float:
+        """Fraction of the total variance kept by the first ``f`` eigenvectors."""
+        total = float(np.sum(self.eigenvalues))
+        if total <= 0:
+            return 1.0
+        return 1.0 - self.dropped_variance(f) / total
+
+
+def _as_rows(x: ArrayLike, d: int, name: str) -> NDArray[np.float64]:
+    a = np.asarray(x, dtype=np.float64)
+    a = np.atleast_2d(a)
+    if a.ndim != 2 or a.shape[1] != d:
+        raise ValueError(f"{name} must have shape (N, {d}), got {np.asarray(x).shape}")
+    return a
+
+
+def fit_pca(vectors: ArrayLike) -> PCABasis:
+    """Mean, covariance (divisor N) and its eigen-decomposition, all in the Rust kernels.
+
+    Parameters
+    ----------
+    vectors : (N, d) array
+        One vector per row (N ≥ 2).
+    """
+    x = np.ascontiguousarray(vectors, dtype=np.float64)
+    if x.ndim != 2:
+        raise ValueError(f"vectors must be a 2-D array (N, d), got shape {x.shape}")
+    if x.shape[0] < 2:
+        raise ValueError(f"PCA needs at least 2 vectors, got {x.shape[0]}")
+    mean, cov = kernels.covariance(x)
+    values, vecs = kernels.eigh(cov)
+    return PCABasis(
+        mean=np.asarray(mean),
+        eigenvalues=np.asarray(values),
+        eigenvectors=np.asarray(vecs),
+        n_vectors=int(x.shape[0]),
+    )
+
+
+def fit_pca_chunks(chunks: Iterable[ArrayLike]) -> PCABasis:
+    """:func:`fit_pca` over a corpus given in chunks of rows (mergeable accumulator)."""
+    acc = kernels.CovarianceAccumulator()
+    n = 0
+    for chunk in chunks:
+        c = np.ascontiguousarray(chunk, dtype=np.float64)
+        if c.shape[0] == 0:
+            continue
+        acc.update(c)
+        n += int(c.shape[0])
+    if n < 2:
+        raise ValueError(f"PCA needs at least 2 vectors, got {n}")
+    values, vecs = kernels.eigh(np.asarray(acc.covariance))
+    return PCABasis(
+        mean=np.asarray(acc.mean),
+        eigenvalues=np.asarray(values),
+        eigenvectors=np.asarray(vecs),
+        n_vectors=n,
+    )

@@ -1,0 +1,128 @@
+"""From trials to segments: inverse kinematics → low-pass → segmentation, on a whole corpus.
+
+Glue between :mod:`visprim.ik`, :mod:`visprim.filtering` and :mod:`visprim.segment` used by
+:class:`~visprim.model.PrimitiveModel`, the report and the classifier. The corpus is
+concatenated once; each stage runs on the concatenation (one Rust kernel call for the
+filter, one for the zero-velocity crossings, one for the resampling).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from visprim.filtering import lowpass_concatenated
+from visprim.ik import arm_angles_corpus
+from visprim.segment import CorpusSegmentation, segment_concatenated, seg2
+from visprim.trial import Trial
+
+
+@dataclass(frozen=True)
+class PreparedCorpus:
+    """A corpus after IK, low-pass and segmentation.
+
+    Attributes
+    ----------
+    names : list of str — trial names.
+    times_all : (F,) seconds — all trials' timestamps, concatenated.
+    raw_angles_all : (F, 4) radians — IK angles before the low-pass.
+    angles_all : (F, 4) radians — low-passed angles.
+    offsets : (n_trials,) int — first frame of each trial in the concatenation.
+    segmentation : CorpusSegmentation — segments (trial, start/end seconds and frames).
+    """
+
+    names: list[str]
+    times_all: NDArray[np.float64]
+    raw_angles_all: NDArray[np.float64]
+    angles_all: NDArray[np.float64]
+    offsets: NDArray[np.int64]
+    segmentation: CorpusSegmentation
+
+    def _split(self, a: NDArray[np.float64]) -> list[NDArray[np.float64]]:
+        return np.split(a, self.offsets[1:])
+
+    @property
+    def times(self) -> list[NDArray[np.float64]]:
+        """Per-trial timestamps (views), seconds."""
+        return self._split(self.times_all)
+
+    @property
+    def angles(self) -> list[NDArray[np.float64]]:
+        """Per-trial low-passed angles (views), (T_i, 4) radians."""
+        return self._split(self.angles_all)
+
+    @property
+    def raw_angles(self) -> list[NDArray[np.float64]]:
+        """Per-trial IK angles before filtering (views), (T_i, 4) radians."""
+        return self._split(self.raw_angles_all)
+
+    @property
+    def segments(self) -> list[NDArray[np.float64]]:
+        """Per-trial (n_i, 2) [start, end] seconds."""
+        return self.segmentation.per_trial()
+
+    @property
+    def seg2_threshold(self) -> float | None:
+        """SEG-2 constant c in (rad/s)² (None for SEG-1)."""
+        return self.segmentation.threshold
+
+    @property
+    def n_trials(self) -> int:
+        return int(self.offsets.size)
+
+
+def prepare_corpus(
+    trials: Sequence[Trial],
+    *,
+    filter_order: int = 10,
+    cutoff: float = 0.25,
+    segmentation: str = "seg2",
+    zvc_threshold_deg: float = 5.0,
+    window: float = 0.3,
+    seg2_threshold: float | None = None,
+) -> PreparedCorpus:
+    """IK, zero-phase low-pass and segmentation of ``trials`` (see the module docstring).
+
+    ``seg2_threshold=None`` tunes SEG-2's constant on this corpus from each trial's
+    ``repetitions``; the other parameters are those of :class:`~visprim.model.PrimitiveModel`.
+    """
+    trials = list(trials)
+    if not trials:
+        raise ValueError("prepare_corpus: no trials given")
+    names = [t.name or (t.source or f"#{i}") for i, t in enumerate(trials)]
+    raw = np.concatenate(arm_angles_corpus(trials))
+    times = np.concatenate([t.times for t in trials])
+    lengths = np.array([t.n_frames for t in trials], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+    filtered = lowpass_concatenated(raw, offsets, order=filter_order, cutoff=cutoff, names=names)
+    seg = segment_concatenated(
+        times,
+        filtered,
+        offsets,
+        segmentation,  # type: ignore[arg-type]
+        repetitions=np.array([t.repetitions for t in trials], dtype=np.int64),
+        threshold=seg2_threshold,
+        window=window,
+        min_change_deg=zvc_threshold_deg,
+    )
+    return PreparedCorpus(names, times, raw, filtered, offsets, seg)
+
+
+def seg2_partition(
+    trial: Trial,
+    *,
+    filter_order: int = 10,
+    cutoff: float = 0.25,
+    threshold: float | None = None,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """One trial's SEG-2 partition: ``(times (T,) s, low-passed angles (T, 4) rad,
+    segments (n, 2) s)``; ``threshold=None`` tunes c on this trial from its repetitions."""
+    raw = arm_angles_corpus([trial])[0]
+    angles = lowpass_concatenated(
+        raw, np.zeros(1, dtype=np.int64), order=filter_order, cutoff=cutoff, names=[trial.name]
+    )
+    segments = seg2(trial.times, angles, repetitions=trial.repetitions, threshold=threshold)
+    return trial.times, angles, segments

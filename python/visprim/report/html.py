@@ -1,0 +1,90 @@
+"""A single self-contained ``index.html`` page showing the report's figures and tables."""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from visprim.errors import ErrorTable, _fmt
+
+_CSS = """
+body { font-family: system-ui, sans-serif; max-width: 1150px; margin: 2em auto; padding: 0 1em;
+       color: #222; line-height: 1.45; }
+h1 { font-size: 1.6em; } h2 { font-size: 1.25em; margin-top: 2em; border-bottom: 1px solid #ddd; }
+figure { margin: 1.2em 0; } figure img { max-width: 100%; border: 1px solid #eee; }
+figcaption { font-size: 0.9em; color: #555; }
+table { border-collapse: collapse; margin: 0.8em 0; font-size: 0.9em; }
+th, td { border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: right; }
+th { background: #f4f4f4; } caption { text-align: left; font-weight: bold; padding: 0.3em 0; }
+pre { background: #f7f7f7; padding: 0.8em; overflow-x: auto; font-size: 0.85em; }
+.note { font-size: 0.85em; color: #555; }
+"""
+
+
+@dataclass
+class Page:
+    """Sections of the page, in order: ("h2 title", html body)."""
+
+    title: str
+    intro: str = ""
+    sections: list[tuple[str, str]] = field(default_factory=list)
+
+    def add(self, heading: str, body_html: str) -> None:
+        self.sections.append((heading, body_html))
+
+    def render(self) -> str:
+        parts = [
+            "<!DOCTYPE html>",
+            '<html lang="en"><head><meta charset="utf-8">',
+            f"<title>{html.escape(self.title)}</title>",
+            f"<style>{_CSS}</style></head><body>",
+            f"<h1>{html.escape(self.title)}</h1>",
+            self.intro,
+        ]
+        for heading, body in self.sections:
+            parts.append(f"<h2>{html.escape(heading)}</h2>")
+            parts.append(body)
+        parts.append("</body></html>")
+        return "\n".join(parts) + "\n"
+
+    def write(self, path: Path) -> Path:
+        path.write_text(self.render(), encoding="utf-8")
+        return path
+
+
+def figure(src: str, caption: str) -> str:
+    """An <img> with a caption (``src`` relative to the page)."""
+    return (
+        f'<figure><img src="{html.escape(src)}" alt="{html.escape(caption)}">'
+        f"<figcaption>{html.escape(caption)}</figcaption></figure>"
+    )
+
+
+def table(t: ErrorTable, links: Sequence[tuple[str, str]] = ()) -> str:
+    """An :class:`~visprim.errors.ErrorTable` as an HTML table (+ links to its files)."""
+    head = "".join(f"<th>{html.escape(c)}</th>" for c in t.columns)
+    rows = "".join(
+        "<tr>" + "".join(f"<td>{html.escape(_fmt(v))}</td>" for v in r) + "</tr>" for r in t.rows
+    )
+    notes = "".join(f'<p class="note">{html.escape(n)}</p>' for n in t.notes)
+    link = ""
+    if links:
+        link = '<p class="note">' + " · ".join(
+            f'<a href="{html.escape(h)}">{html.escape(label)}</a>' for label, h in links
+        ) + "</p>"
+    return (
+        f"<table><caption>{html.escape(t.title)}</caption><tr>{head}</tr>{rows}</table>"
+        f"{notes}{link}"
+    )
+
+
+def pre(text: str) -> str:
+    """Preformatted text."""
+    return f"<pre>{html.escape(text)}</pre>"
+
+
+def paragraph(text: str) -> str:
+    """A paragraph of plain text."""
+    return f"<p>{html.escape(text)}</p>"

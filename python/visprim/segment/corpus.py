@@ -1,0 +1,187 @@
+"""Whole-corpus segmentation: velocities, ZVCs, SEG-1 / SEG-2 on all trials at once.
+
+The trials are concatenated once; velocities (numpy on the concatenation), ZVCs (one call of
+the Rust ragged kernel) and the SEG-1 / SEG-2 rules (numpy, no loop over trials) then run on
+the whole corpus. Results come back as one table of segments with, for each, the trial it
+belongs to, its start and end in seconds and as fractional frame indices (ready for
+:func:`visprim.kernels.resample_segments` on the concatenated angles, see
+:meth:`CorpusSegmentation.global_frames`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from visprim.segment.clock import times_to_frames
+from visprim.segment.seg1 import DEFAULT_WINDOW, seg1_from_crossings
+from visprim.segment.seg2 import (
+    _segments_from_boundaries,
+    seg2_boundaries,
+    tune_seg2_threshold_concatenated,
+)
+from visprim.segment.velocity import velocity_concatenated
+from visprim.segment.zvc import DEFAULT_MIN_CHANGE_DEG, zvc_concatenated
+
+__all__ = ["CorpusSegmentation", "segment_concatenated", "segment_corpus"]
+
+Method = Literal["seg1", "seg2"]
+
+
+@dataclass(frozen=True)
+class CorpusSegmentation:
+    """Segments of a concatenated corpus, sorted by trial then time.
+
+    Attributes
+    ----------
+    method : "seg1" or "seg2"
+    trial : (n,) int64, index of each segment's trial
+    start, end : (n,) float64, seconds on the trial's clock
+    start_frame, end_frame : (n,) float64, fractional frame indices within the trial
+    offsets : (n_trials,) int64, first frame of each trial in the concatenation
+    n_frames : int, total frames of the concatenation
+    threshold : float or None, the SEG-2 threshold c in (rad/s)² (None for SEG-1)
+    z : (n_frames,) float64 or None, SEG-2's Σ θ̇ᵢ² per frame, (rad/s)² (None for SEG-1)
+    """
+
+    method: str
+    trial: NDArray[np.int64]
+    start: NDArray[np.float64]
+    end: NDArray[np.float64]
+    start_frame: NDArray[np.float64]
+    end_frame: NDArray[np.float64]
+    offsets: NDArray[np.int64]
+    n_frames: int
+    threshold: float | None = None
+    z: NDArray[np.float64] | None = None
+
+    @property
+    def n_segments(self) -> int:
+        return int(self.trial.size)
+
+    @property
+    def n_trials(self) -> int:
+        return int(self.offsets.size)
+
+    @property
+    def durations(self) -> NDArray[np.float64]:
+        """(n,) seconds."""
+        return self.end - self.start
+
+    def global_frames(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Start and end as fractional frame indices into the concatenated corpus."""
+        base = self.offsets[self.trial].astype(np.float64)
+        return base + self.start_frame, base + self.end_frame
+
+    def counts(self) -> NDArray[np.int64]:
+        """(n_trials,) number of segments of each trial."""
+        return np.bincount(self.trial, minlength=self.n_trials).astype(np.int64)
+
+    def per_trial(self) -> list[NDArray[np.float64]]:
+        """One (n_i, 2) [start, end] seconds array per trial."""
+        pairs = np.stack([self.start, self.end], axis=1)
+        return np.split(pairs, np.cumsum(self.counts())[:-1])
+
+
+def segment_concatenated(
+    times: ArrayLike,
+    angles: ArrayLike,
+    offsets: ArrayLike,
+    method: Method = "seg2",
+    *,
+    repetitions: ArrayLike | int = 1,
+    threshold: float | None = None,
+    coverage: float = 1.0,
+    window: float = DEFAULT_WINDOW,
+    min_change_deg: float = DEFAULT_MIN_CHANGE_DEG,
+    min_dofs: int = 2,
+) -> CorpusSegmentation:
+    """Segment every trial of a concatenated corpus.
+
+    Parameters
+    ----------
+    times : (N,) seconds; angles : (N, C) radians (normally low-passed);
+    offsets : (n_trials,) first frame of each trial.
+    method : "seg1" or "seg2"
+    repetitions : int or (n_trials,) ints
+        SEG-2 only: repetitions of each trial, for tuning the global threshold.
+    threshold : float, optional
+        SEG-2 only: c in (rad/s)²; default: tuned on this corpus
+        (:func:`~visprim.segment.tune_seg2_threshold`, with ``coverage``).
+    window, min_change_deg, min_dofs
+        SEG-1 only: see :func:`~visprim.segment.seg1`.
+    """
+    t = np.ascontiguousarray(times, dtype=np.float64)
+    a = np.ascontiguousarray(angles, dtype=np.float64)
+    off = np.ascontiguousarray(offsets, dtype=np.int64)
+    if a.ndim != 2 or t.shape != (a.shape[0],):
+        raise ValueError(
+            f"need times (N,) and angles (N, channels) of equal N, got {t.shape} and {a.shape}"
+        )
+    if off.ndim != 1 or off.size == 0 or off[0] != 0 or np.any(np.diff(off) <= 0):
+        raise ValueError("offsets must be a non-empty increasing 1-D array starting at 0")
+    if off[-1] >= a.shape[0]:
+        raise ValueError(f"offsets must be < the number of frames ({a.shape[0]})")
+    v = velocity_concatenated(t, a, off)
+    z = None
+    c = None
+    if method == "seg1":
+        crossings = zvc_concatenated(t, a, off, min_change_deg=min_change_deg, velocity=v)
+        trial, start, end = seg1_from_crossings(crossings, window=window, min_dofs=min_dofs)
+    elif method == "seg2":
+        z = np.einsum("ij,ij->i", v, v)
+        if threshold is None:
+            c = tune_seg2_threshold_concatenated(z, off, repetitions, coverage=coverage)
+        else:
+            c = float(threshold)
+        trial, start, end = _segments_from_boundaries(*seg2_boundaries(t, z, off, c))
+    else:
+        raise ValueError(f"method must be 'seg1' or 'seg2', got {method!r}")
+    return CorpusSegmentation(
+        method=method,
+        trial=trial,
+        start=start,
+        end=end,
+        start_frame=times_to_frames(t, off, trial, start),
+        end_frame=times_to_frames(t, off, trial, end),
+        offsets=off,
+        n_frames=int(a.shape[0]),
+        threshold=c,
+        z=z,
+    )
+
+
+def segment_corpus(
+    times_list: Sequence[ArrayLike],
+    angles_list: Sequence[ArrayLike],
+    method: Method = "seg2",
+    *,
+    repetitions: Sequence[int] | int = 1,
+    threshold: float | None = None,
+    coverage: float = 1.0,
+    window: float = DEFAULT_WINDOW,
+    min_change_deg: float = DEFAULT_MIN_CHANGE_DEG,
+    min_dofs: int = 2,
+) -> CorpusSegmentation:
+    """:func:`segment_concatenated` on lists of per-trial times (T_i,) s and angles
+    (T_i, C) rad (concatenated here once)."""
+    if len(times_list) != len(angles_list) or len(times_list) == 0:
+        raise ValueError("times_list and angles_list must be non-empty and of equal length")
+    lengths = np.array([np.shape(a)[0] for a in angles_list], dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+    return segment_concatenated(
+        np.concatenate([np.asarray(t, dtype=np.float64) for t in times_list]),
+        np.concatenate([np.asarray(a, dtype=np.float64) for a in angles_list]),
+        offsets,
+        method,
+        repetitions=np.asarray(repetitions, dtype=np.int64),
+        threshold=threshold,
+        coverage=coverage,
+        window=window,
+        min_change_deg=min_change_deg,
+        min_dofs=min_dofs,
+    )

@@ -1,0 +1,114 @@
+"""SEG-1: segmentation at zero-velocity crossings shared by several DOFs.
+
+Algorithm (per trial, vectorised over a corpus):
+
+1. Find the significant ZVCs of every DOF (:mod:`visprim.segment.zvc`).
+2. Merge the ZVCs of all DOFs, in time order, into *events*: a ZVC closer than ``window``
+   seconds (default 0.3 s = 300 ms) to the previous ZVC joins that ZVC's event (single
+   linkage along time). An event's time is the mean time of its ZVCs.
+3. An event is a *snip* when ZVCs of at least ``min_dofs`` (default 2, "more than one")
+   distinct DOFs fall in it; otherwise it is a lone ZVC.
+4. The movement is cut at every event; a segment between two consecutive events is kept
+   only if **both** ends are snips. Segments next to a lone ZVC are dropped, so SEG-1 does
+   not partition the movement (unlike SEG-2), and the first onset of a trial (from rest,
+   where no velocity changes sign) is never a snip.
+
+Consecutive snips are more than ``window`` apart, so every segment lasts more than
+``window`` seconds.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from visprim.segment.zvc import DEFAULT_MIN_CHANGE_DEG, CorpusCrossings, zvc_concatenated
+
+__all__ = ["DEFAULT_WINDOW", "Seg1Events", "seg1", "seg1_events", "seg1_from_crossings"]
+
+#: Seconds within which ZVCs of different DOFs count as one event (300 ms, as the paper).
+DEFAULT_WINDOW: float = 0.3
+
+
+class Seg1Events(NamedTuple):
+    """Events of a corpus, sorted by trial then time."""
+
+    trial: NDArray[np.int64]  #: (m,) trial index
+    time: NDArray[np.float64]  #: (m,) seconds, mean time of the event's ZVCs
+    n_dofs: NDArray[np.int64]  #: (m,) number of distinct DOFs with a ZVC in the event
+    is_snip: NDArray[np.bool_]  #: (m,) n_dofs >= min_dofs
+
+
+def seg1_events(
+    crossings: CorpusCrossings, *, window: float = DEFAULT_WINDOW, min_dofs: int = 2
+) -> Seg1Events:
+    """Group the ZVCs of a corpus into events (steps 2–3 of the module docstring)."""
+    if not (np.isfinite(window) and window > 0):
+        raise ValueError(f"window must be a positive number of seconds, got {window!r}")
+    if int(min_dofs) < 1:
+        raise ValueError(f"min_dofs must be >= 1, got {min_dofs!r}")
+    order = np.lexsort((crossings.time, crossings.trial))
+    trial = crossings.trial[order]
+    time = crossings.time[order]
+    dof = crossings.dof[order]
+    if trial.size == 0:
+        empty_i = np.zeros(0, dtype=np.int64)
+        return Seg1Events(empty_i, np.zeros(0), empty_i, np.zeros(0, dtype=bool))
+    new = np.ones(trial.size, dtype=bool)
+    new[1:] = (trial[1:] != trial[:-1]) | (np.diff(time) >= window)
+    event = np.cumsum(new) - 1
+    m = int(event[-1]) + 1
+    counts = np.bincount(event, minlength=m)
+    mean_time = np.bincount(event, weights=time, minlength=m) / counts
+    n_dof = int(dof.max()) + 1
+    pairs = np.unique(event * n_dof + dof)
+    n_dofs = np.bincount(pairs // n_dof, minlength=m).astype(np.int64)
+    return Seg1Events(trial[new], mean_time, n_dofs, n_dofs >= int(min_dofs))
+
+
+def seg1_from_crossings(
+    crossings: CorpusCrossings, *, window: float = DEFAULT_WINDOW, min_dofs: int = 2
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+    """SEG-1 segments of a corpus from its ZVCs: ``(trial, start s, end s)`` arrays, sorted
+    by trial then time."""
+    ev = seg1_events(crossings, window=window, min_dofs=min_dofs)
+    keep = (ev.trial[1:] == ev.trial[:-1]) & ev.is_snip[1:] & ev.is_snip[:-1]
+    return ev.trial[:-1][keep], ev.time[:-1][keep], ev.time[1:][keep]
+
+
+def seg1(
+    times: ArrayLike,
+    angles: ArrayLike,
+    window: float = DEFAULT_WINDOW,
+    *,
+    min_change_deg: float = DEFAULT_MIN_CHANGE_DEG,
+    min_dofs: int = 2,
+) -> NDArray[np.float64]:
+    """SEG-1 segments of one trial (see the module docstring).
+
+    Parameters
+    ----------
+    times : (T,) seconds
+        Timestamps (velocities are computed from them).
+    angles : (T, C) radians
+        Joint angles, normally low-passed first (:mod:`visprim.filtering`).
+    window : float, seconds
+        ZVCs of different DOFs closer than this form one event (default 0.3 s).
+    min_change_deg : float, degrees
+        Significant-movement threshold of the ZVCs (:mod:`visprim.segment.zvc`).
+    min_dofs : int
+        Distinct DOFs an event needs to be a snip (default 2: "more than one DOF").
+
+    Returns
+    -------
+    (n, 2) float64 array of [start, end] times in seconds, in time order (may be empty;
+    consecutive segments need not touch).
+    """
+    a = np.asarray(angles, dtype=np.float64)
+    if a.ndim != 2:
+        raise ValueError(f"angles must have shape (T, channels), got {a.shape}")
+    c = zvc_concatenated(times, a, np.zeros(1, dtype=np.int64), min_change_deg=min_change_deg)
+    _, start, end = seg1_from_crossings(c, window=window, min_dofs=min_dofs)
+    return np.stack([start, end], axis=1) if start.size else np.zeros((0, 2))

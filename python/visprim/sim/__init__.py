@@ -1,0 +1,28 @@
+"""Adonis in DART: a 20-DOF humanoid torso that performs the learned primitives.
+
+- :mod:`~visprim.sim.model`: the body (one table of dimensions; mass and inertia from the
+  shapes at 1,050 kg/m³), :func:`build_adonis` → ``(world, skeleton)``.
+- :mod:`~visprim.sim.servo`: the stable-PD joint servo and its per-joint gains.
+- :mod:`~visprim.sim.sequencer`: the right arm's 4 angles → joint targets, via points.
+- :mod:`~visprim.sim.playback`: :func:`play` → :class:`Playback` (tracking metrics, frames).
+- :mod:`~visprim.sim.render`: :func:`render_png`, :func:`render_gif` (matplotlib, headless).
+- :mod:`~visprim.sim.cli`: ``visprim simulate`` and :func:`demo_primitives`.
+
+Units: seconds, metres, radians (degrees only in fields named ``_deg``).
+"""
+
+from __future__ import annotations
+
+from visprim.sim.model import build_adonis
+from visprim.sim.playback import Playback, SimulationDiverged, play
+from visprim.sim.render import Camera, render_gif, render_png
+
+__all__ = [
+    "Camera",
+    "Playback",
+    "SimulationDiverged",
+    "build_adonis",
+    "play",
+    "render_gif",
+    "render_png",
+]

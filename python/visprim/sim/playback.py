@@ -1,0 +1,362 @@
+"""Play a 4-angle arm trajectory on Adonis: via-point sequencer + stable-PD servo + metrics.
+
+:func:`play` is the one entry point: it builds (or reuses) the model, maps the trajectory onto
+the right arm (:mod:`visprim.sim.sequencer`), runs the servo (:mod:`visprim.sim.servo`) at
+the world's time step with gravity and no collision, and returns a :class:`Playback` with the
+tracking metrics and the body transforms at a render rate for :mod:`visprim.sim.render`.
+
+Joint error: for a ball joint the angle of the rotation from target to actual (geodesic,
+independent of the Euler-angle parametrisation, so finite at the Z-Y-Z singularity), for a
+revolute joint the absolute angle difference. The tracking metrics are taken over the two
+joints the angles drive (right shoulder, right elbow) at every time step, against the set
+point the servo was following (the target trajectory including any waits on via points).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import dartpy as dart
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
+
+from visprim.sim.model import HAND_POINT, LINKS, ShapeSpec, build_adonis
+from visprim.sim.sequencer import (
+    ELBOW_JOINT,
+    SHOULDER_JOINT,
+    ViaPointSequencer,
+    build_reference,
+)
+from visprim.sim.servo import JointGains, StablePD
+
+#: Joint speed (rad/s) beyond which a playback is declared diverged.
+DIVERGENCE_SPEED: float = 1.0e3
+
+
+class SimulationDiverged(RuntimeError):
+    """The simulation produced NaN or runaway joint velocities."""
+
+
+@dataclass(eq=False)
+class Playback:
+    """Result of :func:`play`. Times in seconds from the start, angles in radians unless the
+    name says ``_deg``.
+
+    Attributes
+    ----------
+    times : (N,) array, s
+        Every control step (the simulation time step apart).
+    q_target, q_actual : (N, 20) arrays, rad
+        Set point and actual joint positions (ball joints: rotation vectors; order
+        ``dof_names``).
+    joint_errors_deg : (N, n_joints) array, degrees
+        Error of every joint with DOF (order ``joint_names``), see the module docstring.
+    rms_error_deg, max_error_deg : float
+        RMS and maximum error of the right shoulder and elbow over all steps.
+    rest_max_error_deg : float
+        Largest error of any other joint (held at rest).
+    completion_time : float, s
+        When the last via point was reached (or given up after its timeout).
+    movement_duration : float, s
+        Duration of the trajectory that was played.
+    reached_all : bool
+        Whether every via point was reached within the vicinity (none timed out).
+    via_times : (n_via,) array, s
+        Nominal times of the via points on the trajectory.
+    via_reach_times : (n_via,) array, s
+        When each via point was reached (NaN if it timed out).
+    frame_times : (F,) array, s
+        Times of the rendered frames (every ``1 / render_fps`` s and the final state).
+    frames : (F, n_bodies, 4, 4) array
+        World transforms of every body (order ``body_names``) at ``frame_times``, metres.
+    hand_path : (F, 3) array, m
+        The right hand's finger point (:data:`visprim.sim.model.HAND_POINT`) at the frames.
+    hand_reference : (M, 3) array, m
+        The finger point along the target trajectory (forward kinematics, every 10 ms).
+    hand_via : (n_via, 3) array, m
+        The finger point at the via points.
+    body_names : tuple of str; body_shapes : tuple of tuples of ShapeSpec
+        The bodies and their shapes, for rendering.
+    dof_names, joint_names : tuple of str
+    render_fps : float
+        Frame rate at which ``frames`` were recorded (Hz).
+    wall_time : float, s
+        Wall-clock time of the simulation loop (informative; not deterministic).
+    """
+
+    times: NDArray[np.float64]
+    q_target: NDArray[np.float64]
+    q_actual: NDArray[np.float64]
+    joint_errors_deg: NDArray[np.float64]
+    rms_error_deg: float
+    max_error_deg: float
+    rest_max_error_deg: float
+    completion_time: float
+    movement_duration: float
+    reached_all: bool
+    via_times: NDArray[np.float64]
+    via_reach_times: NDArray[np.float64]
+    frame_times: NDArray[np.float64]
+    frames: NDArray[np.float64]
+    hand_path: NDArray[np.float64]
+    hand_reference: NDArray[np.float64]
+    hand_via: NDArray[np.float64]
+    body_names: tuple[str, ...]
+    body_shapes: tuple[tuple[ShapeSpec, ...], ...]
+    dof_names: tuple[str, ...]
+    joint_names: tuple[str, ...]
+    render_fps: float
+    wall_time: float
+
+    @property
+    def n_via(self) -> int:
+        """Number of via points."""
+        return int(self.via_times.shape[0])
+
+    @property
+    def n_reached(self) -> int:
+        """Number of via points reached within the vicinity."""
+        return int(np.isfinite(self.via_reach_times).sum())
+
+    @property
+    def time_ratio(self) -> float:
+        """``completion_time / movement_duration`` (1 = the movement's own pace)."""
+        return self.completion_time / self.movement_duration
+
+    def summary(self) -> str:
+        """One line: tracking errors, completion time, via points."""
+        return (
+            f"RMS {self.rms_error_deg:.2f} deg, max {self.max_error_deg:.2f} deg, "
+            f"completed in {self.completion_time:.2f} s of {self.movement_duration:.2f} s "
+            f"({self.time_ratio:.2f}x), via points {self.n_reached}/{self.n_via}"
+        )
+
+
+def _joint_slices(skeleton: dart.dynamics.Skeleton) -> tuple[list[str], list[slice]]:
+    names, slices = [], []
+    for j in range(skeleton.getNumJoints()):
+        joint = skeleton.getJoint(j)
+        n = joint.getNumDofs()
+        if n:
+            start = joint.getIndexInSkeleton(0)
+            names.append(joint.getName())
+            slices.append(slice(start, start + n))
+    return names, slices
+
+
+def joint_errors(
+    skeleton: dart.dynamics.Skeleton, q_target: ArrayLike, q_actual: ArrayLike
+) -> NDArray[np.float64]:
+    """Per-joint errors (N, n_joints) in radians between two (N, n_dofs) position arrays.
+
+    Ball joints (3 DOF, rotation vectors): the angle of ``R_targetᵀ R_actual``; 1-DOF joints:
+    the absolute difference.
+    """
+    qt = np.atleast_2d(np.asarray(q_target, dtype=np.float64))
+    qa = np.atleast_2d(np.asarray(q_actual, dtype=np.float64))
+    if qt.shape != qa.shape or qt.shape[1] != skeleton.getNumDofs():
+        raise ValueError(
+            f"joint_errors: q_target {qt.shape} and q_actual {qa.shape} must both be "
+            f"(N, {skeleton.getNumDofs()})"
+        )
+    _, slices = _joint_slices(skeleton)
+    out = np.empty((qt.shape[0], len(slices)))
+    for i, s in enumerate(slices):
+        if s.stop - s.start == 3:
+            rel = Rotation.from_rotvec(qt[:, s]).inv() * Rotation.from_rotvec(qa[:, s])
+            out[:, i] = rel.magnitude()
+        else:
+            out[:, i] = np.abs(qa[:, s] - qt[:, s]).max(axis=1)
+    return out
+
+
+def body_transforms(skeleton: dart.dynamics.Skeleton) -> NDArray[np.float64]:
+    """World transforms (n_bodies, 4, 4) of every body node, metres."""
+    return np.stack([b.getWorldTransform().matrix() for b in skeleton.getBodyNodes()])
+
+
+def hand_points(frames: NDArray[np.float64], hand_index: int) -> NDArray[np.float64]:
+    """The finger point (:data:`HAND_POINT`) in the world for (F, n_bodies, 4, 4) frames."""
+    tf = frames[:, hand_index]
+    return tf[:, :3, :3] @ np.asarray(HAND_POINT) + tf[:, :3, 3]
+
+
+def _forward_kinematics(
+    skeleton: dart.dynamics.Skeleton, positions: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    saved = skeleton.getPositions()
+    out = np.empty((positions.shape[0], skeleton.getNumBodyNodes(), 4, 4))
+    for i, q in enumerate(positions):
+        skeleton.setPositions(q)
+        out[i] = body_transforms(skeleton)
+    skeleton.setPositions(saved)
+    return out
+
+
+def play(
+    times: ArrayLike,
+    angles: ArrayLike,
+    *,
+    vicinity: float = math.radians(3.0),
+    timeout: float = 0.5,
+    via_spacing: float = 0.1,
+    dt: float = 0.001,
+    render_fps: float = 25.0,
+    gains: dict[str, JointGains] | None = None,
+    model: tuple[dart.simulation.World, dart.dynamics.Skeleton] | None = None,
+) -> Playback:
+    """Perform a right-arm trajectory on Adonis and measure how well it was tracked.
+
+    Parameters
+    ----------
+    times : (T,) array, seconds
+        Strictly increasing sample times (any origin).
+    angles : (T, 4) array, radians
+        The method's angles (γ, β, α, elbow) of the right arm (:mod:`visprim.arm`).
+    vicinity : float, radians
+        A via point counts as reached when every joint is within this of it (default 3°).
+    timeout : float, seconds
+        Longest wait on one via point before it is given up (default 0.5 s).
+    via_spacing : float, seconds
+        Via points every this much trajectory time (default 0.1 s), plus the end point.
+    dt : float, seconds
+        Simulation and control time step (default 1 ms).
+    render_fps : float, Hz
+        Rate at which body transforms are stored for rendering (default 25).
+    gains : dict, optional
+        Per-joint PD gains (default :data:`visprim.sim.servo.GAINS`).
+    model : (world, skeleton), optional
+        Reuse a model from :func:`build_adonis` (its time step must equal ``dt``); its state
+        is overwritten. By default a new one is built.
+
+    The body starts at rest except for the right arm, which starts on the trajectory's first
+    sample with its velocity; the run ends when the last via point is reached or given up.
+
+    Raises
+    ------
+    ValueError
+        Bad trajectory or parameters (the message names the argument).
+    SimulationDiverged
+        NaN or joint speeds above :data:`DIVERGENCE_SPEED` rad/s.
+    """
+    if not (np.isfinite(render_fps) and render_fps > 0):
+        raise ValueError(f"render_fps must be > 0 Hz, got {render_fps}")
+    if model is None:
+        world, skel = build_adonis(dt)
+    else:
+        world, skel = model
+        if not math.isclose(world.getTimeStep(), dt, rel_tol=1e-12):
+            raise ValueError(
+                f"model: the world's time step {world.getTimeStep()} s differs from dt = {dt} s"
+            )
+    ref = build_reference(skel, times, angles, dt, via_spacing)
+    joint_names, slices = _joint_slices(skel)
+    seq = ViaPointSequencer(ref, slices, float(vicinity), float(timeout))
+    servo = StablePD(skel, dt, gains)
+    positions, velocities = ref.positions, ref.velocities
+    body_names = tuple(b.getName() for b in skel.getBodyNodes())
+    hand_index = body_names.index("r_hand")
+
+    # Forward kinematics of the target (before the run; it moves the skeleton).
+    ref_stride = max(1, int(round(0.01 / dt)))
+    ref_steps = np.unique(np.append(np.arange(0, ref.times.shape[0], ref_stride), ref.via_steps))
+    hand_reference = hand_points(_forward_kinematics(skel, positions[ref_steps]), hand_index)
+    hand_via = hand_points(_forward_kinematics(skel, positions[ref.via_steps]), hand_index)
+
+    world.reset()
+    skel.resetCommands()
+    skel.clearExternalForces()
+    skel.setPositions(positions[0])
+    skel.setVelocities(velocities[0])
+
+    n_wait_max = int(math.ceil(timeout / dt)) + 2
+    max_steps = ref.times.shape[0] + ref.via_steps.shape[0] * n_wait_max + 1
+    rec_q = np.empty((max_steps + 1, skel.getNumDofs()))
+    rec_k = np.empty(max_steps + 1, dtype=np.int64)
+    rec_q[0] = positions[0]
+    rec_k[0] = 0
+    frame_stride = max(1, int(round(1.0 / (render_fps * dt))))
+    frame_steps = [0]
+    frames = [body_transforms(skel)]
+
+    n_rec = 1
+    completion = float("nan")
+    feedforward = velocities * servo.kd  # kd θ̇d on the grid
+    kp, kp_dt = servo.kp, servo.kp * dt
+    q = skel.getPositions()
+    wall0 = time.perf_counter()
+    for n in range(max_steps):
+        dq = skel.getVelocities()
+        if seq.step == seq.target_step:
+            seq.check(skel.getPositionDifferences(positions[seq.step], q), n * dt)
+            if seq.done:
+                completion = n * dt
+                break
+        moved = seq.advance()
+        k = seq.step
+        # Stable PD (servo.StablePD.forces, inlined): DART adds the implicit -kd θ̇(n+1).
+        tau = kp * skel.getPositionDifferences(positions[k], q) - kp_dt * dq
+        if moved:
+            tau += feedforward[k]
+        skel.setForces(tau)
+        world.step()
+        q = skel.getPositions()
+        rec_q[n_rec] = q
+        rec_k[n_rec] = k
+        n_rec += 1
+        if (n + 1) % frame_stride == 0:
+            v = skel.getVelocities()
+            if not (np.all(np.isfinite(q)) and np.abs(v).max() < DIVERGENCE_SPEED):
+                raise SimulationDiverged(
+                    f"play: the simulation diverged at t = {(n + 1) * dt:.3f} s "
+                    f"(max joint speed {np.abs(v).max():.3g} rad/s)"
+                )
+            frames.append(body_transforms(skel))
+            frame_steps.append(n + 1)
+    else:  # pragma: no cover - the timeouts bound the loop
+        completion = max_steps * dt
+    wall_time = time.perf_counter() - wall0
+    if not np.all(np.isfinite(rec_q[:n_rec])):
+        raise SimulationDiverged("play: the simulation produced NaN joint positions")
+    if frame_steps[-1] != n_rec - 1:
+        frames.append(body_transforms(skel))
+        frame_steps.append(n_rec - 1)
+
+    q_actual = rec_q[:n_rec].copy()
+    q_target = positions[rec_k[:n_rec]]
+    errors = joint_errors(skel, q_target, q_actual)
+    arm = [joint_names.index(SHOULDER_JOINT), joint_names.index(ELBOW_JOINT)]
+    rest = [i for i in range(len(joint_names)) if i not in arm]
+    frames_arr = np.stack(frames)
+    return Playback(
+        times=np.arange(n_rec) * dt,
+        q_target=q_target,
+        q_actual=q_actual,
+        joint_errors_deg=np.degrees(errors),
+        rms_error_deg=float(np.degrees(np.sqrt(np.mean(errors[:, arm] ** 2)))),
+        max_error_deg=float(np.degrees(errors[:, arm].max())),
+        rest_max_error_deg=float(np.degrees(errors[:, rest].max())) if rest else 0.0,
+        completion_time=completion,
+        movement_duration=ref.duration,
+        reached_all=bool(seq.reached.all()),
+        via_times=ref.times[ref.via_steps],
+        via_reach_times=seq.reach_times.copy(),
+        frame_times=np.asarray(frame_steps, dtype=np.float64) * dt,
+        frames=frames_arr,
+        hand_path=hand_points(frames_arr, hand_index),
+        hand_reference=hand_reference,
+        hand_via=hand_via,
+        body_names=body_names,
+        body_shapes=tuple(_shapes_by_name()[name] for name in body_names),
+        dof_names=tuple(skel.getDof(i).getName() for i in range(skel.getNumDofs())),
+        joint_names=tuple(joint_names),
+        render_fps=float(render_fps),
+        wall_time=wall_time,
+    )
+
+
+def _shapes_by_name() -> dict[str, tuple[ShapeSpec, ...]]:
+    return {link.name: link.shapes for link in LINKS}

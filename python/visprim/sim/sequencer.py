@@ -1,0 +1,240 @@
+"""From the method's 4 arm angles to joint targets on the control grid, and via points.
+
+Mapping (see :mod:`visprim.arm`): the right shoulder's rotation in body axes is
+``arm.shoulder_rotation_body(angles)`` (Euler Z-Y-Z in the shoulder frame → rotation), and the
+shoulder ball joint's coordinates are its rotation vector (DART's ``BallJoint`` positions are
+exponential coordinates: ``convertToPositions(R)``); the elbow's revolute coordinate is the
+elbow angle (its axis is ``arm.ELBOW_AXIS_BODY``). Every other joint is held at rest (zero).
+The angles are interpolated with a cubic spline onto the control grid (one sample per time
+step) before the mapping, so the rotation, not the Euler angles, is what the servo sees.
+
+Via points (:class:`Reference.via_steps`) are samples of that smooth trajectory every
+``via_spacing`` seconds, the last one at its end. The sequencer (:class:`ViaPointSequencer`)
+holds one *current target* via point at a time. The servo's set point runs along the smooth
+trajectory towards the current target and arrives there at the target's nominal time; there
+the next target is taken as soon as the configuration is within ``vicinity`` of the current
+one (every joint's error, a ball joint's geodesic angle, at most ``vicinity`` radians) or the
+set point has waited ``timeout`` seconds on it (then the via point counts as missed). While it
+waits, the set point stays on the via point with zero target velocity. A servo that keeps up
+never waits, so the movement keeps the timing of the trajectory; one that falls behind is
+made to reach each via point before moving on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import dartpy as dart
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.interpolate import CubicSpline
+from scipy.spatial.transform import Rotation
+
+from visprim.arm import shoulder_rotation_body
+
+#: Joints driven by the method's 4 angles: (ball joint, revolute joint).
+SHOULDER_JOINT = "r_shoulder"
+ELBOW_JOINT = "r_elbow"
+
+
+def validate_trajectory(
+    times: ArrayLike, angles: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Checked float copies of ``times`` (T,) seconds and ``angles`` (T, 4) radians."""
+    t = np.asarray(times, dtype=np.float64)
+    a = np.asarray(angles, dtype=np.float64)
+    if t.ndim != 1 or t.shape[0] < 2:
+        raise ValueError(f"times must be a 1-D array of at least 2 seconds values, got {t.shape}")
+    if a.shape != (t.shape[0], 4):
+        raise ValueError(
+            f"angles must have shape (T, 4) = ({t.shape[0]}, 4) radians (gamma, beta, alpha, "
+            f"elbow), got {a.shape}"
+        )
+    if not np.all(np.isfinite(t)):
+        raise ValueError("times contain NaN or infinity")
+    if not np.all(np.isfinite(a)):
+        bad = int(np.flatnonzero(~np.isfinite(a).all(axis=1))[0])
+        raise ValueError(f"angles contain NaN or infinity (first at sample {bad})")
+    if np.any(np.diff(t) <= 0):
+        i = int(np.argmax(np.diff(t) <= 0))
+        raise ValueError(f"times must be strictly increasing; sample {i + 1} does not follow {i}")
+    return t, a
+
+
+def arm_dof_indices(skeleton: dart.dynamics.Skeleton) -> tuple[slice, int]:
+    """Skeleton DOF indices of the right shoulder (a slice of 3) and the right elbow."""
+    shoulder = skeleton.getJoint(SHOULDER_JOINT)
+    elbow = skeleton.getJoint(ELBOW_JOINT)
+    if shoulder is None or elbow is None:
+        raise ValueError(
+            f"skeleton {skeleton.getName()!r} has no joints {SHOULDER_JOINT!r} and {ELBOW_JOINT!r}"
+        )
+    start = shoulder.getIndexInSkeleton(0)
+    return slice(start, start + 3), elbow.getIndexInSkeleton(0)
+
+
+def angles_to_positions(skeleton: dart.dynamics.Skeleton, angles: ArrayLike) -> NDArray[np.float64]:
+    """Full joint positions (T, n_dofs) for (T, 4) arm angles in radians; rest elsewhere."""
+    a = np.atleast_2d(np.asarray(angles, dtype=np.float64))
+    sh, el = arm_dof_indices(skeleton)
+    q = np.zeros((a.shape[0], skeleton.getNumDofs()))
+    q[:, sh] = Rotation.from_matrix(shoulder_rotation_body(a)).as_rotvec()
+    q[:, el] = a[:, 3]
+    return q
+
+
+def positions_to_angles(
+    skeleton: dart.dynamics.Skeleton, positions: ArrayLike
+) -> NDArray[np.float64]:
+    """The method's 4 angles (T, 4) radians from joint positions (T, n_dofs).
+
+    Inverse of :func:`angles_to_positions` for β in (0, π); at β = 0 (Z-Y-Z singularity) the
+    split between γ and α is arbitrary (α = 0 is returned).
+    """
+    q = np.atleast_2d(np.asarray(positions, dtype=np.float64))
+    sh, el = arm_dof_indices(skeleton)
+    m = np.diag([1.0, -1.0, -1.0])
+    r = m @ Rotation.from_rotvec(q[:, sh]).as_matrix() @ m  # shoulder frame S
+    beta = np.arccos(np.clip(r[:, 2, 2], -1.0, 1.0))
+    gamma = np.arctan2(r[:, 1, 2], r[:, 0, 2])
+    alpha = np.arctan2(r[:, 2, 1], -r[:, 2, 0])
+    flat = np.sin(beta) < 1e-9
+    gamma[flat] = np.arctan2(r[flat, 1, 0], r[flat, 0, 0])
+    alpha[flat] = 0.0
+    return np.stack([gamma, beta, alpha, q[:, el]], axis=1)
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The target trajectory sampled on the control grid.
+
+    Attributes
+    ----------
+    dt : float
+        Grid spacing = the simulation time step, seconds.
+    times : (K + 1,) array, seconds
+        ``k * dt`` from the start of the trajectory.
+    positions : (K + 1, n_dofs) array, radians
+        Joint positions (ball joints: rotation vectors).
+    velocities : (K + 1, n_dofs) array, rad/s
+        Joint velocities (ball joints: angular velocity in the child frame, the convention of
+        DART's ball-joint velocities).
+    via_steps : (n_via,) int array
+        Grid indices of the via points, increasing; the last is K.
+    duration : float
+        Duration of the input trajectory, seconds.
+    """
+
+    dt: float
+    times: NDArray[np.float64]
+    positions: NDArray[np.float64]
+    velocities: NDArray[np.float64]
+    via_steps: NDArray[np.int64]
+    duration: float
+
+
+def build_reference(
+    skeleton: dart.dynamics.Skeleton,
+    times: ArrayLike,
+    angles: ArrayLike,
+    dt: float,
+    via_spacing: float = 0.1,
+) -> Reference:
+    """Sample a (T, 4) angle trajectory (``times`` seconds, any origin) on the control grid.
+
+    Via points every ``via_spacing`` seconds (at least one: the end point).
+    """
+    t, a = validate_trajectory(times, angles)
+    if not (np.isfinite(dt) and dt > 0):
+        raise ValueError(f"dt must be a positive number of seconds, got {dt}")
+    if not (np.isfinite(via_spacing) and via_spacing >= dt):
+        raise ValueError(f"via_spacing must be at least the time step {dt} s, got {via_spacing} s")
+    duration = float(t[-1] - t[0])
+    n_steps = max(1, int(round(duration / dt)))
+    grid = np.minimum(np.arange(n_steps + 1) * dt, duration)
+    spline = CubicSpline(t - t[0], a, axis=0)
+    a_grid = spline(grid)
+    q = angles_to_positions(skeleton, a_grid)
+    v = np.zeros_like(q)
+    sh, el = arm_dof_indices(skeleton)
+    v[:, el] = spline(grid, 1)[:, 3]
+    # Angular velocity in the child frame by central differences of the rotation on the grid.
+    rot = Rotation.from_rotvec(q[:, sh])
+    step = (rot[:-1].inv() * rot[1:]).as_rotvec() / dt  # (K, 3), between samples
+    v[1:-1, sh] = 0.5 * (step[:-1] + step[1:])
+    v[0, sh] = step[0]
+    v[-1, sh] = step[-1]
+    stride = max(1, int(round(via_spacing / dt)))
+    via = np.arange(stride, n_steps, stride, dtype=np.int64)
+    if via.size and n_steps - via[-1] < stride // 2:
+        via = via[:-1]  # avoid a via point crowding the end point
+    via = np.append(via, np.int64(n_steps))
+    return Reference(dt, np.arange(n_steps + 1) * dt, q, v, via, duration)
+
+
+@dataclass
+class ViaPointSequencer:
+    """The via-point state machine (see the module docstring).
+
+    ``vicinity`` in radians (every joint's error at most this), ``timeout`` in seconds of
+    waiting on one via point. Each control step: if ``step == target_step`` call
+    :meth:`check` with the error to the via point, then :meth:`advance`.
+
+    Attributes: ``step`` grid index of the set point; ``current`` index of the target via
+    point; ``target_step`` its grid index (-1 once done); ``wait`` seconds waited on it;
+    ``reached`` / ``reach_times`` (s, NaN if missed) per via point.
+    """
+
+    reference: Reference
+    joint_slices: list[slice]
+    vicinity: float
+    timeout: float
+    step: int = field(init=False, default=0)
+    current: int = field(init=False, default=0)
+    target_step: int = field(init=False, default=-1)
+    wait: float = field(init=False, default=0.0)
+    reached: NDArray[np.bool_] = field(init=False)
+    reach_times: NDArray[np.float64] = field(init=False)
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.vicinity) and self.vicinity > 0):
+            raise ValueError(f"vicinity must be > 0 radians, got {self.vicinity}")
+        if not (np.isfinite(self.timeout) and self.timeout >= 0):
+            raise ValueError(f"timeout must be >= 0 seconds, got {self.timeout}")
+        self._via = [int(v) for v in self.reference.via_steps]
+        self.reached = np.zeros(len(self._via), dtype=bool)
+        self.reach_times = np.full(len(self._via), np.nan)
+        self.target_step = self._via[0]
+
+    @property
+    def done(self) -> bool:
+        """Whether every via point has been reached or given up."""
+        return self.current >= len(self._via)
+
+    def joint_errors(self, error: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Per-joint error magnitudes (radians) of a DOF error vector."""
+        return np.array([np.sqrt(np.dot(error[s], error[s])) for s in self.joint_slices])
+
+    def check(self, error: NDArray[np.float64], time: float) -> None:
+        """At the target via point: take the next target if ``error`` (θ_via ⊖ θ, radians)
+        is within the vicinity or the wait has timed out. ``time`` (s) is recorded when
+        reached."""
+        if self.joint_errors(error).max() <= self.vicinity:
+            self.reached[self.current] = True
+            self.reach_times[self.current] = time
+        elif self.wait < self.timeout:
+            return
+        self.current += 1
+        self.wait = 0.0
+        self.target_step = self._via[self.current] if self.current < len(self._via) else -1
+
+    def advance(self) -> bool:
+        """Move the set point one grid step towards the target via point, or wait on it.
+
+        Returns True if the set point moved (the target velocity applies), False if it waits.
+        """
+        if self.step < self.target_step:
+            self.step += 1
+            return True
+        self.wait += self.reference.dt
+        return False

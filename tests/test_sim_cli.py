@@ -1,0 +1,108 @@
+"""`visprim simulate` and demo_primitives, with a stand-in model and with a learned one."""
+
+from __future__ import annotations
+
+import csv
+
+import numpy as np
+import pytest
+import visprim.sim.cli as sim_cli
+from PIL import Image
+from visprim.cli import main
+from visprim.sim.trajectories import minimum_jerk
+
+
+class FakeModel:
+    """Duck-typed PrimitiveModel: three minimum-jerk strokes as 'primitives'."""
+
+    def __init__(self) -> None:
+        ends = np.array(
+            [
+                [[0.0, 0.4, 0.0, 0.4], [0.3, 1.3, 0.4, 1.2]],
+                [[1.2, 1.0, -0.2, 0.3], [1.5, 0.6, 0.2, 1.4]],
+                [[0.5, 0.8, 0.5, 1.5], [0.1, 1.8, 0.0, 0.5]],
+            ]
+        )
+        self.primitive_durations_ = np.array([0.5, 0.4, 0.6])
+        self.labels_ = np.array([2, 2, 1, 2, 0, 1])
+        self._angles = []
+        for pair, d in zip(ends, self.primitive_durations_, strict=True):
+            t, a = minimum_jerk(pair, [d], rate=(100 - 1) / d)
+            self._angles.append(a[:100])
+
+    @property
+    def n_primitives(self) -> int:
+        return 3
+
+    def primitive_angles(self, k: int) -> np.ndarray:
+        return self._angles[k]
+
+
+def test_primitive_trajectory_spans_the_duration() -> None:
+    times, angles = sim_cli.primitive_trajectory(FakeModel(), 1)
+    assert times[0] == 0.0 and times[-1] == pytest.approx(0.4)
+    assert angles.shape == (100, 4)
+    with pytest.raises(ValueError, match="out of range"):
+        sim_cli.primitive_trajectory(FakeModel(), 3)
+
+
+def test_demo_primitives_writes_gifs_and_metrics(tmp_path, capsys) -> None:
+    paths = sim_cli.demo_primitives(FakeModel(), tmp_path / "demo", n=2)
+    # The two most used primitives (labels_): 2 and 1.
+    assert [p.name for p in paths] == ["adonis_primitive_01.gif", "adonis_primitive_02.gif"]
+    for p in paths:
+        with Image.open(p) as im:
+            assert im.n_frames > 5
+    with open(tmp_path / "demo" / "adonis_metrics.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [int(r["primitive"]) for r in rows] == [0, 1, 2]
+    for r in rows:
+        assert float(r["rms_error_deg"]) <= 5.0
+        assert float(r["time_ratio"]) <= 1.5
+        assert r["via_reached"] == r["via_points"]
+    out = capsys.readouterr().out
+    assert "all 3 primitives" in out and "adonis_primitive_02.gif" in out
+
+
+def test_simulate_command_with_stand_in_model(tmp_path, monkeypatch, capsys) -> None:
+    model_file = tmp_path / "model.npz"
+    model_file.write_bytes(b"stand-in")
+    monkeypatch.setattr(sim_cli, "_load_model", lambda path: FakeModel())
+    out = tmp_path / "clip.gif"
+    assert main(["simulate", str(model_file), "--primitive", "2", "--out", str(out)]) == 0
+    with Image.open(out) as im:
+        assert im.n_frames == 16  # 0.6 s at 25 Hz, t = 0 included
+    assert "primitive 2: RMS" in capsys.readouterr().out
+    assert main(["simulate", str(model_file), "--primitive", "7", "--out", str(out)]) == 2
+    assert "out of range" in capsys.readouterr().err
+    assert main(["simulate", str(model_file), "--out", str(out)]) == 2
+    assert main(["simulate", str(tmp_path / "missing.npz"), "--primitive", "0"]) == 2
+    assert "not found" in capsys.readouterr().err
+
+
+def test_simulate_learned_model_primitives_and_movement(tmp_path, capsys) -> None:
+    """End to end on a small generated corpus: learn, save, then play every primitive
+    (issue 6 targets) and render one primitive and one reconstructed movement."""
+    datasets = pytest.importorskip("visprim.datasets")
+    from visprim import PrimitiveModel
+    from visprim.markers_csv import write_marker_csv
+
+    trials = datasets.imitation_experiment(n_subjects=2, n_stimuli=4, seed=0)
+    model = PrimitiveModel(n_components=8, n_clusters=5, n_init=2).fit(trials)
+    path = tmp_path / "model.vpm"
+    model.save(path)
+    loaded = PrimitiveModel.load(path)
+    for k, pb in sim_cli.play_primitives(loaded).items():
+        assert np.all(np.isfinite(pb.q_actual)), k
+        assert pb.rms_error_deg <= 5.0, (k, pb.summary())
+        assert pb.completion_time <= 1.5 * pb.movement_duration, (k, pb.summary())
+    gif = tmp_path / "p0.gif"
+    assert main(["simulate", str(path), "--primitive", "0", "--out", str(gif)]) == 0
+    assert gif.is_file()
+    trial_file = tmp_path / f"{trials[0].name}.csv"
+    write_marker_csv(trial_file, trials[0])
+    gif2 = tmp_path / "movement.gif"
+    assert main(["simulate", str(path), "--movement", str(trial_file), "--out", str(gif2)]) == 0
+    with Image.open(gif2) as im:
+        assert im.n_frames > 25  # a whole 3-5 s movement
+    assert "movement" in capsys.readouterr().out

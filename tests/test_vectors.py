@@ -1,0 +1,122 @@
+"""Segment vectors (visprim.vectors) against a per-segment numpy reference."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from visprim.vectors import (
+    corpus_vectors,
+    segment_vectors,
+    stretch,
+    time_to_frame,
+    to_curves,
+    to_vectors,
+)
+
+
+def _reference(times, angles, segments, n):
+    """Per segment and channel: np.interp of the angle at n equally spaced fractional
+    frame indices between the segment's ends (the documented definition)."""
+    frames = np.arange(times.size, dtype=float)
+    out = []
+    for s, e in segments:
+        fs, fe = np.interp([s, e], times, frames)
+        grid = np.linspace(fs, fe, n)
+        out.append(np.concatenate([np.interp(grid, frames, angles[:, c]) for c in range(angles.shape[1])]))
+    return np.array(out)
+
+
+def _trial(rng, n_frames, jitter=True):
+    dt = 0.034
+    times = np.cumsum(dt + (rng.normal(0, 3e-4, n_frames) if jitter else np.zeros(n_frames)))
+    angles = np.cumsum(rng.normal(0, 0.05, (n_frames, 4)), axis=0)
+    return times, angles
+
+
+def test_corpus_vectors_match_reference_on_jittered_clocks():
+    rng = np.random.default_rng(1)
+    trials = [_trial(rng, n) for n in (57, 120, 33)]
+    segs = []
+    for times, _ in trials:
+        cuts = np.sort(rng.uniform(times[0], times[-1], 5))
+        segs.append(np.stack([cuts[:-1], cuts[1:]], axis=1))
+    sv = corpus_vectors([t for t, _ in trials], [a for _, a in trials], segs, n_samples=100)
+    ref = np.concatenate([_reference(t, a, s, 100) for (t, a), s in zip(trials, segs, strict=True)])
+    assert sv.vectors.shape == (12, 400)
+    np.testing.assert_allclose(sv.vectors, ref, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(sv.trial, np.repeat([0, 1, 2], 4))
+    np.testing.assert_allclose(sv.durations, np.concatenate([s[:, 1] - s[:, 0] for s in segs]))
+    assert len(sv) == 12
+
+
+def test_segment_vectors_endpoints_are_the_angles_at_the_segment_ends():
+    rng = np.random.default_rng(2)
+    times, angles = _trial(rng, 80, jitter=False)
+    s, e = times[10], times[50]
+    v = segment_vectors(times, angles, [[s, e]], n_samples=7)
+    curves = to_curves(v)[0]
+    np.testing.assert_allclose(curves[0], angles[10], atol=1e-12)
+    np.testing.assert_allclose(curves[-1], angles[50], atol=1e-12)
+
+
+def test_layout_is_channel_major_and_round_trips():
+    x = np.arange(2 * 4 * 5, dtype=float).reshape(2, 20)
+    curves = to_curves(x)
+    assert curves.shape == (2, 5, 4)
+    # channel 1 of vector 0 is elements 5..9
+    np.testing.assert_array_equal(curves[0, :, 1], x[0, 5:10])
+    np.testing.assert_array_equal(to_vectors(curves), x)
+    np.testing.assert_array_equal(to_vectors(to_curves(x[0])), x[0])
+
+
+def test_time_to_frame_uniform_clock():
+    times = 0.5 + 0.034 * np.arange(10)
+    np.testing.assert_allclose(time_to_frame(times, [0.5, 0.5 + 0.034 * 2.5]), [0.0, 2.5])
+    with pytest.raises(ValueError, match="within the trial"):
+        time_to_frame(times, [0.0])
+
+
+def test_stretch_reproduces_a_linear_curve_on_any_clock():
+    curve = np.stack([np.linspace(0, 1, 100), np.linspace(2, -2, 100)], axis=1)
+    t = np.array([1.0, 1.3, 1.77, 2.0])
+    out = stretch(curve, 1.0, 2.0, t)
+    np.testing.assert_allclose(out[:, 0], t - 1.0, atol=1e-12)
+    np.testing.assert_allclose(out[:, 1], 2 - 4 * (t - 1.0), atol=1e-12)
+    with pytest.raises(ValueError, match="outside the segment"):
+        stretch(curve, 1.0, 2.0, [2.5])
+    with pytest.raises(ValueError, match="after its start"):
+        stretch(curve, 2.0, 1.0, [1.5])
+
+
+@pytest.mark.parametrize(
+    ("segments", "match"),
+    [
+        ([[1.0, 0.5]], "ends"),
+        ([[0.1, 99.0]], "within the trial"),
+        ([[0.1, np.nan]], "NaN"),
+        ([[0.1, 0.2, 0.3]], r"shape \(n, 2\)"),
+    ],
+)
+def test_bad_segments_are_named(segments, match):
+    times = 0.034 * np.arange(50)
+    angles = np.zeros((50, 4))
+    with pytest.raises(ValueError, match=match) as info:
+        corpus_vectors([times], [angles], [segments], names=["trial_x"])
+    assert "trial_x" in str(info.value)
+
+
+def test_corpus_errors():
+    times = 0.034 * np.arange(50)
+    with pytest.raises(ValueError, match="differ in length"):
+        corpus_vectors([times], [], [])
+    with pytest.raises(ValueError, match="empty"):
+        corpus_vectors([], [], [])
+    with pytest.raises(ValueError, match="no segments"):
+        corpus_vectors([times], [np.zeros((50, 4))], [np.zeros((0, 2))])
+    with pytest.raises(ValueError, match="channels"):
+        corpus_vectors(
+            [times, times], [np.zeros((50, 4)), np.zeros((50, 3))], [[[0.1, 0.5]], [[0.1, 0.5]]]
+        )
+    with pytest.raises(ValueError, match="n_samples"):
+        corpus_vectors([times], [np.zeros((50, 4))], [[[0.1, 0.5]]], n_samples=1)
