@@ -6,7 +6,7 @@ share them instead of refitting.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 from visprim.datasets import imitation_experiment
 from visprim.model import PrimitiveModel
@@ -16,13 +16,13 @@ from visprim.trial import Trial
 SOURCE = {"kind": "generated", "n_subjects": 11, "n_stimuli": 20, "seed": 0}
 
 
-@lru_cache(maxsize=None)
+@cache
 def default_trials() -> tuple[Trial, ...]:
     """The default generated experiment (11 subjects x 20 stimuli, seed 0)."""
     return tuple(imitation_experiment())
 
 
-@lru_cache(maxsize=None)
+@cache
 def fitted(segmentation: str = "seg2", n_clusters: int = 30) -> PrimitiveModel:
     """A model fitted on :func:`default_trials` (do not mutate it)."""
     model = PrimitiveModel(segmentation=segmentation, n_clusters=n_clusters)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from visprim.pca import fit_pca, fit_pca_chunks
 
 

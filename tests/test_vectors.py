@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from visprim.vectors import (
     corpus_vectors,
     segment_vectors,
@@ -23,7 +22,9 @@ def _reference(times, angles, segments, n):
     for s, e in segments:
         fs, fe = np.interp([s, e], times, frames)
         grid = np.linspace(fs, fe, n)
-        out.append(np.concatenate([np.interp(grid, frames, angles[:, c]) for c in range(angles.shape[1])]))
+        out.append(
+            np.concatenate([np.interp(grid, frames, angles[:, c]) for c in range(angles.shape[1])])
+        )
     return np.array(out)
 
 

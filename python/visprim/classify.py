@@ -55,7 +55,9 @@ class TrialClassification:
         return np.bincount(self.labels, minlength=self.n_primitives).astype(np.int64)
 
 
-def classify_trials(model: PrimitiveModel, trials: Sequence[Trial] | Trial) -> list[TrialClassification]:
+def classify_trials(
+    model: PrimitiveModel, trials: Sequence[Trial] | Trial
+) -> list[TrialClassification]:
     """Segment ``trials`` with the model's (fitted) settings and give each segment its
     nearest primitive. Trials where no segment is found get empty sequences."""
     model._check_fitted()
@@ -110,9 +112,7 @@ def match_strokes(
     b = np.asarray(boundaries, dtype=np.float64)
     lab = np.asarray(labels, dtype=np.int64)
     if b.ndim != 1 or lab.shape != (max(b.size - 1, 0),):
-        raise ValueError(
-            f"need boundaries (m + 1,) and labels (m,), got {b.shape} and {lab.shape}"
-        )
+        raise ValueError(f"need boundaries (m + 1,) and labels (m,), got {b.shape} and {lab.shape}")
     if seg.shape[0] == 0 or lab.size == 0:
         return np.full(seg.shape[0], -1, dtype=np.int64)
     lo = np.maximum(seg[:, :1], b[None, :-1])
@@ -129,7 +129,9 @@ def purity(predicted: ArrayLike, truth: ArrayLike) -> float:
     p = np.asarray(predicted, dtype=np.int64)
     t = np.asarray(truth, dtype=np.int64)
     if p.shape != t.shape or p.ndim != 1:
-        raise ValueError(f"predicted and truth must be 1-D of equal length, got {p.shape}, {t.shape}")
+        raise ValueError(
+            f"predicted and truth must be 1-D of equal length, got {p.shape}, {t.shape}"
+        )
     if p.size == 0:
         raise ValueError("purity of an empty labelling is undefined")
     _, pi = np.unique(p, return_inverse=True)

@@ -68,9 +68,7 @@ def measured_projection_error(basis: PCABasis, vectors: ArrayLike, f: int) -> fl
     return mean_squared_distance(x, basis.reconstruct(basis.project(x, f)))
 
 
-def clustering_error(
-    projections: ArrayLike, centers: ArrayLike, labels: ArrayLike
-) -> float:
+def clustering_error(projections: ArrayLike, centers: ArrayLike, labels: ArrayLike) -> float:
     """``mean ‖p − c_label‖²`` in the projection space (rad²)."""
     c = np.asarray(centers, dtype=np.float64)
     return mean_squared_distance(projections, c[np.asarray(labels, dtype=np.int64)])
@@ -273,7 +271,9 @@ def compute_error_tables(
         ks.append((int(kv), used))
     notes2 = []
     if any(req != used for req, used in ks):
-        notes2.append(f"Numbers of clusters above the number of segments N = {n} were clipped to N.")
+        notes2.append(
+            f"Numbers of clusters above the number of segments N = {n} were clipped to N."
+        )
     rows2, rows3 = [], []
     for _req, k in ks:
         if k in known:

@@ -49,8 +49,8 @@ Short = Literal["error", "reduce"]
 
 
 def butterworth(order: int = DEFAULT_ORDER, cutoff: float = DEFAULT_CUTOFF) -> NDArray[np.float64]:
-    """Second-order sections (n_sections, 6) of a digital Butterworth low-pass
-    (``cutoff`` as a fraction of Nyquist, in (0, 1)); the Rust :func:`~visprim.kernels.butter_sos`."""
+    """Second-order sections (n_sections, 6) of a digital Butterworth low-pass (``cutoff``
+    as a fraction of Nyquist, in (0, 1)), from the Rust :func:`~visprim.kernels.butter_sos`."""
     return np.asarray(kernels.butter_sos(int(order), float(cutoff)))
 
 
@@ -102,9 +102,7 @@ def lowpass_concatenated(
     if off.ndim != 1 or off.size == 0 or off[0] != 0:
         raise ValueError("offsets must be a non-empty 1-D array of first frames starting at 0")
     if np.any(np.diff(off) <= 0) or off[-1] >= x.shape[0]:
-        raise ValueError(
-            f"offsets must be strictly increasing and < total_frames ({x.shape[0]})"
-        )
+        raise ValueError(f"offsets must be strictly increasing and < total_frames ({x.shape[0]})")
     if short not in ("error", "reduce"):
         raise ValueError(f"short must be 'error' or 'reduce', got {short!r}")
     sos = butterworth(order, cutoff)
@@ -117,12 +115,14 @@ def lowpass_concatenated(
         return np.asarray(kernels.sosfiltfilt_ragged(sos, x, off, padlen=pad))
     if short == "error":
         idx = np.flatnonzero(is_short)
-        label = [names[i] if names is not None else f"#{i}" for i in idx[:5]]
+        listed = ", ".join(
+            f"{names[i] if names is not None else f'#{i}'} ({lengths[i]} frames)" for i in idx[:5]
+        )
         more = f" and {idx.size - 5} more" if idx.size > 5 else ""
         raise ValueError(
             f"{idx.size} trial(s) have no more frames than the filter padding ({pad} frames "
-            f"for order {order}): {', '.join(f'{s} ({lengths[i]} frames)' for s, i in zip(label, idx))}"
-            f"{more}; drop them, or pass short='reduce' to pad them less"
+            f"for order {order}): {listed}{more}; drop them, or pass short='reduce' to pad "
+            "them less"
         )
     out = np.empty_like(x)
     starts, ends = off, off + lengths
@@ -134,7 +134,9 @@ def lowpass_concatenated(
             continue
         rows = np.concatenate([np.arange(starts[i], ends[i]) for i in idx])
         sub_off = np.concatenate([[0], np.cumsum(lengths[idx])[:-1]]).astype(np.int64)
-        out[rows] = kernels.sosfiltfilt_ragged(sos, np.ascontiguousarray(x[rows]), sub_off, padlen=p)
+        out[rows] = kernels.sosfiltfilt_ragged(
+            sos, np.ascontiguousarray(x[rows]), sub_off, padlen=p
+        )
     return out
 
 

@@ -162,14 +162,21 @@ def arm_angles_corpus(
     if not trials:
         return []
     names = [f"trial {t.name or t.source or i!r}" for i, t in enumerate(trials)]
-    centres = np.concatenate([_joint_centres(t.markers, t.joints, w) for t, w in zip(trials, names)])
     lengths = np.array([t.n_frames for t in trials], dtype=np.int64)
     offsets = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+    # Trial validated its markers (shape, finite); implied centres for all frames at once,
+    # then the recordings' own joint centres where they have them.
+    centres = implied_joint_centres(np.concatenate([t.markers for t in trials]))
+    for k, t in enumerate(trials):
+        if t.joints is not None:
+            centres[offsets[k] : offsets[k] + lengths[k]] = t.joints
     if any(t.body_frame is not None for t in trials):
         eye = np.eye(3)
         frame = np.concatenate(
             [
-                t.body_frame if t.body_frame is not None else np.broadcast_to(eye, (t.n_frames, 3, 3))
+                t.body_frame
+                if t.body_frame is not None
+                else np.broadcast_to(eye, (t.n_frames, 3, 3))
                 for t in trials
             ]
         )
@@ -196,9 +203,7 @@ def _optional_array(
     return a
 
 
-def _joint_centres(
-    markers: ArrayLike, joints: ArrayLike | None, where: str
-) -> NDArray[np.float64]:
+def _joint_centres(markers: ArrayLike, joints: ArrayLike | None, where: str) -> NDArray[np.float64]:
     m = np.asarray(markers, dtype=np.float64)
     if m.ndim != 3 or m.shape[1:] != (4, 3):
         raise ValueError(f"{where}: markers must have shape (T, 4, 3), got {m.shape}")

@@ -165,7 +165,8 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
     def _check_fitted(self) -> None:
         if not hasattr(self, "cluster_centers_"):
             raise NotFittedError(
-                "This PrimitiveModel is not fitted yet; call fit(trials) or PrimitiveModel.load(path)"
+                "This PrimitiveModel is not fitted yet; call fit(trials) or "
+                "PrimitiveModel.load(path)"
             )
 
     # ------------------------------------------------------------------ fitting
@@ -197,7 +198,8 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         seg = corpus.segmentation
         if seg.n_segments == 0:
             raise ValueError(
-                f"no {seg.method.upper()} segment found in {corpus.n_trials} trial(s) "
+                f"no {seg.method.upper().replace('SEG', 'SEG-')} segment found in "
+                f"{corpus.n_trials} trial(s) "
                 f"({', '.join(corpus.names[:3])}{', ...' if corpus.n_trials > 3 else ''})"
             )
         starts, ends = seg.global_frames()
@@ -296,7 +298,9 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
     def basis_(self) -> PCABasis:
         """The PCA basis (mean, eigenvalues, eigenvectors) as a :class:`PCABasis`."""
         self._check_fitted()
-        return PCABasis(self.mean_, self.eigenvalues_, self.eigenvectors_, self.n_training_segments_)
+        return PCABasis(
+            self.mean_, self.eigenvalues_, self.eigenvectors_, self.n_training_segments_
+        )
 
     @property
     def components_(self) -> NDArray[np.float64]:
@@ -449,7 +453,9 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         stretched back to its duration: ``(frame times (m,) s, angles (m, 4) rad)``."""
         self._check_fitted()
         t = np.asarray(times, dtype=np.float64)
-        sv = corpus_vectors([t], [angles], [np.array([[start, end]])], n_samples=int(self.n_samples))
+        sv = corpus_vectors(
+            [t], [angles], [np.array([[start, end]])], n_samples=int(self.n_samples)
+        )
         curve = to_curves(self._reconstruct_vectors(self.transform(sv.vectors), source))[0]
         mask = (t >= start) & (t <= end)
         return t[mask], stretch(curve, start, end, t[mask])
@@ -527,7 +533,9 @@ def _as_trials(trials: Sequence[Trial] | Trial) -> list[Trial]:
     return out
 
 
-def _mean_durations(durations: NDArray[np.float64], labels: NDArray[np.int64], k: int) -> NDArray[np.float64]:
+def _mean_durations(
+    durations: NDArray[np.float64], labels: NDArray[np.int64], k: int
+) -> NDArray[np.float64]:
     """Mean member duration per cluster; a cluster without members gets the overall mean."""
     counts = np.bincount(labels, minlength=k).astype(np.float64)
     sums = np.bincount(labels, weights=durations, minlength=k)

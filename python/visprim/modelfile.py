@@ -117,7 +117,8 @@ def save_model(
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "wb") as fh:
-            np.savez(fh, header=blob, **arrays)
+            savez: Any = np.savez  # (numpy's stub types **kwds as its keyword options)
+            savez(fh, header=blob, **arrays)
             fh.flush()
             os.fsync(fh.fileno())
         os.replace(tmp, path)
@@ -233,8 +234,8 @@ def load_model(path: str | PathLike[str]) -> PrimitiveModel:
             spec = specs[name]
             if list(a.shape) != list(spec.get("shape", [])) or a.dtype.str != spec.get("dtype"):
                 raise ModelFileError(
-                    f"{path}: damaged model file: {name!r} has shape {a.shape} dtype {a.dtype.str}, "
-                    f"header says {spec.get('shape')} {spec.get('dtype')}"
+                    f"{path}: damaged model file: {name!r} has shape {a.shape} dtype "
+                    f"{a.dtype.str}, header says {spec.get('shape')} {spec.get('dtype')}"
                 )
             if _digest(a) != spec.get("sha256"):
                 raise ModelFileError(f"{path}: damaged model file: checksum mismatch in {name!r}")
@@ -251,7 +252,9 @@ def load_model(path: str | PathLike[str]) -> PrimitiveModel:
         and d == 4 * int(params.get("n_samples", -1))
         and f == int(params.get("n_components", -2))
         and arrays["primitive_durations"].shape == (k,)
-        and all(arrays[a].shape == (n,) for a in ("segment_trial", "segment_starts", "segment_ends"))
+        and all(
+            arrays[a].shape == (n,) for a in ("segment_trial", "segment_starts", "segment_ends")
+        )
     )
     if not consistent:
         raise ModelFileError(f"{path}: damaged model file: array shapes are inconsistent")
@@ -270,7 +273,7 @@ def load_model(path: str | PathLike[str]) -> PrimitiveModel:
     model.n_iter_ = int(fitted.get("n_iter", 0))
     thr = fitted.get("seg2_threshold")
     model.seg2_threshold_ = None if thr is None else float(thr)
-    model.n_training_segments_ = int(fitted.get("n_training_segments", n))
+    model.n_training_segments_ = int(fitted.get("n_training_segments") or n)
     model.trial_names_ = list(fitted.get("trial_names", []))
     model.training_source_ = dict(fitted.get("training_source") or {})
     tables = header.get("error_tables")

@@ -55,8 +55,13 @@ def _read_files(paths: Sequence[str]) -> list[Trial]:
     try:
         from visprim.io import read_many
     except ImportError as exc:  # pragma: no cover - the readers are part of visprim
-        raise SystemExit(f"visprim: cannot read recordings, visprim.io unavailable ({exc})") from None
-    trials = read_many(list(paths))
+        raise SystemExit(
+            f"visprim: cannot read recordings, visprim.io unavailable ({exc})"
+        ) from None
+    try:
+        trials = read_many(list(paths))
+    except (ValueError, OSError) as exc:
+        raise SystemExit(f"visprim: {exc}") from None
     if not trials:
         raise SystemExit(f"visprim: no trials found in {', '.join(paths)}")
     return list(trials)
@@ -83,16 +88,32 @@ def _add_generated_options(p: argparse.ArgumentParser) -> None:
 
 def _add_model_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("model parameters (visprim.PrimitiveModel)")
-    g.add_argument("--segmentation", choices=("seg2", "seg1"), default="seg2",
-                   help="segmentation of the training movements (default seg2)")
+    g.add_argument(
+        "--segmentation",
+        choices=("seg2", "seg1"),
+        default="seg2",
+        help="segmentation of the training movements (default seg2)",
+    )
     g.add_argument("--filter-order", type=int, default=10, help="Butterworth order (default 10)")
-    g.add_argument("--cutoff", type=float, default=0.25,
-                   help="normalised low-pass cutoff, fraction of Nyquist (default 0.25)")
-    g.add_argument("--zvc-threshold", type=float, default=5.0,
-                   help="ZVC significant-movement threshold, degrees (default 5)")
+    g.add_argument(
+        "--cutoff",
+        type=float,
+        default=0.25,
+        help="normalised low-pass cutoff, fraction of Nyquist (default 0.25)",
+    )
+    g.add_argument(
+        "--zvc-threshold",
+        type=float,
+        default=5.0,
+        help="ZVC significant-movement threshold, degrees (default 5)",
+    )
     g.add_argument("--window", type=float, default=0.3, help="SEG-1 window, s (default 0.3)")
-    g.add_argument("--seg2-threshold", type=float, default=None,
-                   help="SEG-2 constant c, (rad/s)^2 (default: tuned on the data)")
+    g.add_argument(
+        "--seg2-threshold",
+        type=float,
+        default=None,
+        help="SEG-2 constant c, (rad/s)^2 (default: tuned on the data)",
+    )
     g.add_argument("--samples", type=int, default=100, help="samples per angle (default 100)")
     g.add_argument("--components", type=int, default=30, help="eigenvectors f (default 30)")
     g.add_argument("--clusters", type=int, default=30, help="primitives k (default 30)")
@@ -123,6 +144,12 @@ def _model_from_args(args: argparse.Namespace, **overrides: Any) -> Any:
 # ---------------------------------------------------------------------------- learn
 
 
+def _label(method: str) -> str:
+    from visprim.report import method_label
+
+    return method_label(method)
+
+
 def _learn(args: argparse.Namespace) -> int:
     from visprim.modelfile import save_model
     from visprim.progress import stages
@@ -150,7 +177,7 @@ def _summary(model: Any, n_trials: int) -> str:
     thr = model.seg2_threshold_
     c = f", SEG-2 c = {thr:.4g} (rad/s)^2" if thr is not None else ""
     return (
-        f"{n_trials} trials -> {model.n_training_segments_} {model.segmentation.upper()} "
+        f"{n_trials} trials -> {model.n_training_segments_} {_label(model.segmentation)} "
         f"segments{c}; PCA f = {model.n_components} of {model.dim}; "
         f"k-means k = {model.n_primitives} (inertia {model.inertia_:.4g} rad^2)"
     )
@@ -171,8 +198,11 @@ def _report(args: argparse.Namespace) -> int:
         try:
             trials = load_source(model.training_source_)
         except (OSError, ValueError, SystemExit) as exc:
-            print(f"visprim report: cannot read the training data again ({exc}); "
-                  "writing the model-only part", file=sys.stderr)
+            print(
+                f"visprim report: cannot read the training data again ({exc}); "
+                "writing the model-only part",
+                file=sys.stderr,
+            )
     rep = write_report(model, args.out, trials, trial_name=args.trial)
     for msg in rep.skipped:
         print(f"note: {msg}")
@@ -205,7 +235,9 @@ def _classify(args: argparse.Namespace) -> int:
         with out.open("w", encoding="utf-8") as fh:
             fh.write("trial,segment,start_s,end_s,primitive,squared_distance_rad2\n")
             for r in results:
-                for j, ((s, e), lab, d) in enumerate(zip(r.segments, r.labels, r.distances, strict=True)):
+                for j, ((s, e), lab, d) in enumerate(
+                    zip(r.segments, r.labels, r.distances, strict=True)
+                ):
                     fh.write(f"{r.name},{j},{s:.6f},{e:.6f},{int(lab)},{d:.6g}\n")
         print(f"segment primitives written to {out}")
     if all(t.truth is not None for t in trials):
@@ -236,9 +268,11 @@ def _demo(args: argparse.Namespace) -> int:
         st.step("generating the experiment")
         trials = imitation_experiment(source["n_subjects"], source["n_stimuli"], source["seed"])
         n_true = len({int(v) for t in trials for v in t.truth.labels})  # type: ignore[union-attr]
-        say(f"Generated experiment: {len(trials)} trials ({source['n_subjects']} subjects x "
+        say(
+            f"Generated experiment: {len(trials)} trials ({source['n_subjects']} subjects x "
             f"{source['n_stimuli']} stimuli, seed {source['seed']}), {n_true} true stroke "
-            "primitives.")
+            "primitives."
+        )
 
         st.step("segmentation scores")
         scores = segmentation_scores(_model_from_args(args), trials)
@@ -247,14 +281,14 @@ def _demo(args: argparse.Namespace) -> int:
 
         models = {}
         for method in ("seg1", "seg2"):
-            st.step(f"learning with {method.upper()}")
+            st.step(f"learning with {_label(method)}")
             model = _model_from_args(args, segmentation=method)
             model.fit(trials, source=source)
             models[method] = model
             path = save_model(model, out / f"model_{method}.npz")
-            say(f"{method.upper()}: {_summary(model, len(trials))}; saved {path}")
+            say(f"{_label(method)}: {_summary(model, len(trials))}; saved {path}")
             tables = model.error_table()
-            say(f"\nTables 1-3 ({method.upper()} model):\n")
+            say(f"\nTables 1-3 ({_label(method)} model):\n")
             say(tables.to_markdown())
 
         st.step("classification")
@@ -263,12 +297,16 @@ def _demo(args: argparse.Namespace) -> int:
         k_model = _model_from_args(args, n_clusters=n_true)
         k_model.fit(trials, source=source)
         cls = score_against_truth(k_model, trials)
-        say(f"Classification at k = {n_true} (number of true stroke primitives), SEG-2 "
-            f"segments: {cls}")
+        say(
+            f"Classification at k = {n_true} (number of true stroke primitives), SEG-2 "
+            f"segments: {cls}"
+        )
 
         st.step("report")
         rep = write_report(
-            models["seg2"], out, trials,
+            models["seg2"],
+            out,
+            trials,
             extra_sections=[("visprim demo output", "\n".join(log))],
             title="visprim demo: primitives of the generated imitation experiment (SEG-2)",
         )
@@ -310,8 +348,12 @@ def add_subcommands(sub: Any) -> None:
     )
     p.add_argument("--out", default="out/demo", help="output folder (default out/demo)")
     p.add_argument("--no-sim", action="store_true", help="skip the humanoid GIFs")
-    p.add_argument("--sim-primitives", type=int, default=3,
-                   help="primitives to render on the humanoid (default 3)")
+    p.add_argument(
+        "--sim-primitives",
+        type=int,
+        default=3,
+        help="primitives to render on the humanoid (default 3)",
+    )
     _add_generated_options(p)
     _add_model_options(p)
     p.set_defaults(func=_demo)
@@ -322,8 +364,12 @@ def add_subcommands(sub: Any) -> None:
         description="Learn primitives (PCA + k-means of segment vectors) and write the model "
         "file; prints Tables 1-3.",
     )
-    p.add_argument("data", nargs="*", metavar="DATA",
-                   help="recording files, folders or globs (default: the generated experiment)")
+    p.add_argument(
+        "data",
+        nargs="*",
+        metavar="DATA",
+        help="recording files, folders or globs (default: the generated experiment)",
+    )
     p.add_argument("--out", required=True, metavar="MODEL", help="model file to write (.npz)")
     _add_generated_options(p)
     _add_model_options(p)
@@ -350,8 +396,9 @@ def add_subcommands(sub: Any) -> None:
         "and histogram of primitives (and ARI/purity on generated data).",
     )
     p.add_argument("model", metavar="MODEL", help="model file written by `visprim learn`")
-    p.add_argument("data", nargs="*", metavar="DATA",
-                   help="recordings (default: the generated experiment)")
+    p.add_argument(
+        "data", nargs="*", metavar="DATA", help="recordings (default: the generated experiment)"
+    )
     p.add_argument("--out", default=None, help="also write the segment primitives as CSV")
     _add_generated_options(p)
     p.set_defaults(func=_classify)

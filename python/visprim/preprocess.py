@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from visprim.filtering import lowpass_concatenated
 from visprim.ik import arm_angles_corpus
-from visprim.segment import CorpusSegmentation, segment_concatenated, seg2
+from visprim.segment import CorpusSegmentation, seg2, segment_concatenated
 from visprim.trial import Trial
 
 

@@ -82,7 +82,9 @@ def _check_segments(segments: ArrayLike, where: str) -> NDArray[np.float64]:
     if seg.size == 0:
         return np.zeros((0, 2))
     if seg.ndim != 2 or seg.shape[1] != 2:
-        raise ValueError(f"{where}: segments must have shape (n, 2) (start, end seconds), got {seg.shape}")
+        raise ValueError(
+            f"{where}: segments must have shape (n, 2) (start, end seconds), got {seg.shape}"
+        )
     if not np.all(np.isfinite(seg)):
         raise ValueError(f"{where}: segment times contain NaN or infinity")
     if np.any(seg[:, 1] <= seg[:, 0]):

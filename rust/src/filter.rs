@@ -284,7 +284,8 @@ pub fn sosfilt_zi(sos: &[Sos]) -> Vec<[f64; 2]> {
         .collect()
 }
 
-fn sections(sos: &[Sos]) -> Vec<Section> {
+/// The sections with their `sosfilt_zi` initial states, as the lockstep engine takes them.
+pub fn sections(sos: &[Sos]) -> Vec<Section> {
     sos.iter()
         .zip(sosfilt_zi(sos))
         .map(|(s, zi)| Section {

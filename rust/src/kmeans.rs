@@ -1,1 +1,783 @@
-//! TODO: kernel `kmeans` (being written).
+//! k-means: greedy k-means++ seeding, Lloyd iterations, best of `n_init` runs.
+//!
+//! Semantics follow scikit-learn's `KMeans(algorithm="lloyd")` so that, from the same initial
+//! centres, both give the same labels and centres (up to rounding):
+//! - one iteration = assign every row to its nearest centre (E-step), then move each centre to
+//!   the mean of its rows (M-step); `n_iter` counts these;
+//! - stop when no label changed between two E-steps ("strict convergence"), or when the total
+//!   squared centre shift `Σ_j ‖c_j,new - c_j,old‖²` is `≤ tol × mean(var(X, axis=0))`, or
+//!   after `max_iter` iterations; in the last two cases one more E-step relabels the rows with
+//!   the final centres;
+//! - a cluster left empty by an E-step is re-seeded with the row farthest from its own centre
+//!   (the i-th empty cluster, in index order, gets the i-th farthest row; ties by row index);
+//!   the row keeps its label for that iteration and its old cluster's mean loses it, as in
+//!   scikit-learn. If every row sits exactly on its centre (fewer distinct rows than `k`),
+//!   the empty cluster keeps its previous centre;
+//! - ties between equally near centres go to the lowest centre index.
+//!
+//! Speed without changing the result: distances are computed directly (`Σ (x_j - c_j)²`, see
+//! [`crate::sqdist`]), and Hamerly's bounds (an upper bound on the distance to the own centre,
+//! a lower bound on the distance to any other) let most rows skip the distance computations
+//! once centres settle. A row is only skipped when the bounds prove, with a safety margin far
+//! above rounding (about `1e-12 ×` the data diameter), that its nearest centre is unchanged;
+//! the labels are therefore those of plain Lloyd except for rows whose two nearest centres are
+//! tied within that margin.
+//!
+//! Determinism: rows are processed in fixed chunks (size set by `n`, `k`, `d` only), per-chunk
+//! sums are formed in row order and combined in chunk order, so the result for a given seed is
+//! bit-identical whatever the number of threads.
+
+use rayon::prelude::*;
+
+use crate::kmeanspp::{default_local_trials, kmeans_plusplus, Rng};
+use crate::sqdist::{sq_dist, sq_dists, Panel};
+use crate::{Error, Result};
+
+pub static DBG_SCAN: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+pub static DBG_TIGHT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+/// Rows per distance-kernel call.
+const GROUP: usize = 64;
+/// Memory allowed for the per-chunk partial sums of the M-step.
+const PARTIAL_BYTES: usize = 128 << 20;
+
+/// Parameters of [`kmeans`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct KMeansParams {
+    /// Number of clusters (`1 ≤ k ≤ n`).
+    pub k: usize,
+    /// Independent runs from different k-means++ seedings; the lowest inertia wins.
+    pub n_init: usize,
+    /// Maximum number of Lloyd iterations per run (`≥ 1`).
+    pub max_iter: usize,
+    /// Relative tolerance on the squared centre shift (scaled by the mean column variance).
+    pub tol: f64,
+    /// Seed of the k-means++ draws (run `r` uses a generator derived from `seed` and `r`).
+    pub seed: u64,
+    /// Candidates per k-means++ step; `None`: `2 + ⌊ln k⌋`.
+    pub n_local_trials: Option<usize>,
+}
+
+impl KMeansParams {
+    /// Defaults of scikit-learn's `KMeans` for `k` clusters (one k-means++ run).
+    pub fn new(k: usize) -> Self {
+        Self { k, n_init: 1, max_iter: 300, tol: 1e-4, seed: 0, n_local_trials: None }
+    }
+}
+
+/// A fitted clustering.
+#[derive(Clone, Debug, PartialEq)]
+pub struct KMeansResult {
+    /// Row-major `k × d` centres.
+    pub centers: Vec<f64>,
+    /// Cluster of each row.
+    pub labels: Vec<u32>,
+    /// Sum of squared distances of the rows to their centre.
+    pub inertia: f64,
+    /// Lloyd iterations of the winning run.
+    pub n_iter: usize,
+    /// Number of clusters.
+    pub k: usize,
+    /// Dimension.
+    pub dim: usize,
+}
+
+/// Cluster the rows of the row-major `n × d` matrix `x`.
+///
+/// `init`: row-major `k × d` initial centres (then `n_init` must be 1); `None`: k-means++.
+///
+/// Errors: empty or mis-sized input (Shape), NaN/inf (NonFinite), `k` outside `1..=n`,
+/// `n_init < 1`, `max_iter < 1`, negative or non-finite `tol`, `n_local_trials < 1`, `init`
+/// with `n_init > 1` (InvalidArgument).
+pub fn kmeans(
+    x: &[f64],
+    n: usize,
+    d: usize,
+    params: &KMeansParams,
+    init: Option<&[f64]>,
+) -> Result<KMeansResult> {
+    check_data(x, n, d, "X")?;
+    let k = params.k;
+    if k < 1 || k > n {
+        return Err(Error::InvalidArgument(format!(
+            "k must be between 1 and the number of rows of X ({n}), got {k}"
+        )));
+    }
+    if params.n_init < 1 {
+        return Err(Error::InvalidArgument(format!("n_init must be ≥ 1, got {}", params.n_init)));
+    }
+    if params.max_iter < 1 {
+        return Err(Error::InvalidArgument(format!(
+            "max_iter must be ≥ 1, got {}",
+            params.max_iter
+        )));
+    }
+    if !(params.tol >= 0.0 && params.tol.is_finite()) {
+        return Err(Error::InvalidArgument(format!(
+            "tol must be a finite number ≥ 0, got {}",
+            params.tol
+        )));
+    }
+    let trials = params.n_local_trials.unwrap_or_else(|| default_local_trials(k));
+    if trials < 1 {
+        return Err(Error::InvalidArgument("n_local_trials must be ≥ 1".into()));
+    }
+    let tol_abs = params.tol * mean_variance(x, n, d);
+    let diameter = 2.0 * max_row_radius(x, n, d);
+
+    if let Some(init) = init {
+        if params.n_init != 1 {
+            return Err(Error::InvalidArgument(format!(
+                "n_init must be 1 when initial centres are given, got {}",
+                params.n_init
+            )));
+        }
+        if init.len() != k * d {
+            return Err(Error::Shape(format!(
+                "init has {} values, expected k={k} rows x {d} columns",
+                init.len()
+            )));
+        }
+        check_data(init, k, d, "init")?;
+        return Ok(lloyd(x, n, d, init, k, params.max_iter, tol_abs, diameter));
+    }
+
+    let mut best: Option<KMeansResult> = None;
+    for run in 0..params.n_init {
+        let mut rng = Rng::new(run_seed(params.seed, run as u64));
+        let (centers, _) = kmeans_plusplus(x, n, d, k, trials, &mut rng);
+        let res = lloyd(x, n, d, &centers, k, params.max_iter, tol_abs, diameter);
+        if best.as_ref().is_none_or(|b| res.inertia < b.inertia) {
+            best = Some(res);
+        }
+    }
+    Ok(best.expect("n_init ≥ 1"))
+}
+
+/// Nearest centre (lowest index on ties) and squared distance of every row of the row-major
+/// `n × d` matrix `x` to the row-major `k × d` `centers`.
+///
+/// Errors: empty or mis-sized inputs (Shape), NaN/inf (NonFinite).
+pub fn predict(
+    x: &[f64],
+    n: usize,
+    d: usize,
+    centers: &[f64],
+    k: usize,
+) -> Result<(Vec<u32>, Vec<f64>)> {
+    check_data(x, n, d, "X")?;
+    if k == 0 || centers.len() != k * d {
+        return Err(Error::Shape(format!(
+            "centers must be a non-empty k x {d} matrix, got {} values for k={k}",
+            centers.len()
+        )));
+    }
+    check_data(centers, k, d, "centers")?;
+    let panel = Panel::from_centers(centers, k, d);
+    let ch = crate::kmeanspp::CHUNK;
+    let mut labels = vec![0u32; n];
+    let mut dist = vec![0.0; n];
+    labels.par_chunks_mut(ch).zip(dist.par_chunks_mut(ch)).enumerate().for_each(
+        |(b, (lab, dst))| {
+            let mut buf = vec![0.0; GROUP * panel.kpad()];
+            let kp = panel.kpad();
+            for g in 0..lab.len().div_ceil(GROUP) {
+                let lo = g * GROUP;
+                let hi = (lo + GROUP).min(lab.len());
+                let rows: Vec<&[f64]> =
+                    (b * ch + lo..b * ch + hi).map(|i| &x[i * d..(i + 1) * d]).collect();
+                sq_dists(&rows, &panel, &mut buf);
+                for r in 0..hi - lo {
+                    let (best, bd, _) = two_nearest(&buf[r * kp..r * kp + k]);
+                    lab[lo + r] = best as u32;
+                    dst[lo + r] = bd;
+                }
+            }
+        },
+    );
+    Ok((labels, dist))
+}
+
+/// `tol × mean(var(X, axis=0))`, scikit-learn's absolute tolerance, for `tol` given.
+pub fn mean_variance(x: &[f64], n: usize, d: usize) -> f64 {
+    let ch = crate::kmeanspp::CHUNK;
+    let sums: Vec<Vec<f64>> = x
+        .par_chunks(ch * d)
+        .map(|c| {
+            let mut s = vec![0.0; d];
+            for row in c.chunks_exact(d) {
+                s.iter_mut().zip(row).for_each(|(a, v)| *a += v);
+            }
+            s
+        })
+        .collect();
+    let mut mean = vec![0.0; d];
+    for s in &sums {
+        mean.iter_mut().zip(s).for_each(|(m, v)| *m += v);
+    }
+    mean.iter_mut().for_each(|m| *m /= n as f64);
+    let sq: Vec<f64> = x
+        .par_chunks(ch * d)
+        .map(|c| {
+            let mut s = 0.0;
+            for row in c.chunks_exact(d) {
+                for (v, m) in row.iter().zip(&mean) {
+                    s += (v - m) * (v - m);
+                }
+            }
+            s
+        })
+        .collect();
+    sq.iter().sum::<f64>() / (n as f64 * d as f64)
+}
+
+fn max_row_radius(x: &[f64], n: usize, d: usize) -> f64 {
+    let mut lo = vec![f64::INFINITY; d];
+    let mut hi = vec![f64::NEG_INFINITY; d];
+    for row in x[..n * d].chunks_exact(d) {
+        for j in 0..d {
+            lo[j] = lo[j].min(row[j]);
+            hi[j] = hi[j].max(row[j]);
+        }
+    }
+    // Half the diagonal of the bounding box, plus the box's distance from the origin (the
+    // rounding of coordinates scales with their magnitude).
+    let half: f64 = lo.iter().zip(&hi).map(|(a, b)| (b - a) * (b - a)).sum::<f64>().sqrt() / 2.0;
+    let far: f64 = lo.iter().zip(&hi).map(|(a, b)| a.abs().max(b.abs()).powi(2)).sum::<f64>().sqrt();
+    half + far
+}
+
+fn run_seed(seed: u64, run: u64) -> u64 {
+    seed ^ run.wrapping_mul(0xD1B5_4A32_D192_ED03).rotate_left(17)
+}
+
+fn check_data(x: &[f64], n: usize, d: usize, name: &str) -> Result<()> {
+    if n == 0 || d == 0 {
+        return Err(Error::Shape(format!(
+            "{name} is empty (shape {n}x{d}); need at least one row and one column"
+        )));
+    }
+    if x.len() != n * d {
+        return Err(Error::Shape(format!(
+            "{name} has {} values, expected {n} rows x {d} columns",
+            x.len()
+        )));
+    }
+    if let Some(pos) = x.iter().position(|v| !v.is_finite()) {
+        return Err(Error::NonFinite(format!(
+            "{name} contains NaN or infinity (row {}, column {})",
+            pos / d,
+            pos % d
+        )));
+    }
+    Ok(())
+}
+
+/// Index of the smallest value (first on ties), that value, and the smallest of the others
+/// (`+inf` when there is a single value).
+#[inline]
+fn two_nearest(v: &[f64]) -> (usize, f64, f64) {
+    let mut best = 0;
+    let mut b = v[0];
+    let mut second = f64::INFINITY;
+    for (j, &x) in v.iter().enumerate().skip(1) {
+        if x < b {
+            second = b;
+            b = x;
+            best = j;
+        } else if x < second {
+            second = x;
+        }
+    }
+    (best, b, second)
+}
+
+/// Rows per chunk: fixed by `n`, `k`, `d` (never by the thread count). At least 1024 rows
+/// (and 4k, so the partial sums stay small next to the rows), and few enough chunks that the
+/// partial sums fit in [`PARTIAL_BYTES`].
+fn chunk_rows(n: usize, k: usize, d: usize) -> usize {
+    let max_chunks = (PARTIAL_BYTES / (k * d * 8).max(1)).max(1);
+    1024.max(4 * k).max(n.div_ceil(max_chunks)).min(n).max(1)
+}
+
+/// State of one Lloyd run with Hamerly bounds.
+struct Lloyd<'a> {
+    x: &'a [f64],
+    n: usize,
+    d: usize,
+    k: usize,
+    chunk: usize,
+    centers: Vec<f64>,
+    panel: Panel,
+    labels: Vec<u32>,
+    upper: Vec<f64>,
+    lower: Vec<f64>,
+    /// Per-chunk partial sums (`k × d`) and counts (`k`) of the rows of each cluster.
+    psums: Vec<f64>,
+    pcounts: Vec<u64>,
+    /// Centre drift of the last M-step, applied to the bounds at the next E-step.
+    drift: Vec<f64>,
+    pending_drift: bool,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn lloyd(
+    x: &[f64],
+    n: usize,
+    d: usize,
+    init: &[f64],
+    k: usize,
+    max_iter: usize,
+    tol_abs: f64,
+    diameter: f64,
+) -> KMeansResult {
+    let chunk = chunk_rows(n, k, d);
+    let nchunks = n.div_ceil(chunk);
+    let mut st = Lloyd {
+        x,
+        n,
+        d,
+        k,
+        chunk,
+        centers: init.to_vec(),
+        panel: Panel::from_centers(init, k, d),
+        labels: vec![0; n],
+        upper: vec![f64::INFINITY; n],
+        lower: vec![0.0; n],
+        psums: vec![0.0; nchunks * k * d],
+        pcounts: vec![0; nchunks * k],
+        drift: vec![0.0; k],
+        pending_drift: false,
+    };
+    let mut strict = false;
+    let mut n_iter = 0;
+    let mut sums = vec![0.0; k * d];
+    let mut counts = vec![0u64; k];
+    for it in 0..max_iter {
+        n_iter = it + 1;
+        let slack = (1e-12 + 1e-15 * it as f64) * diameter;
+        let t0 = std::time::Instant::now();
+        let changed = st.e_step(it == 0, true, slack);
+        let t1 = t0.elapsed();
+        if std::env::var("KDBG").is_ok() { eprintln!("it {it} scan {} tight {} e {:?} total {:?}", DBG_SCAN.swap(0, std::sync::atomic::Ordering::Relaxed), DBG_TIGHT.swap(0, std::sync::atomic::Ordering::Relaxed), t1, t0.elapsed()); }
+        st.reduce(&mut sums, &mut counts);
+        if counts.contains(&0) {
+            st.relocate_empty(&mut sums, &mut counts);
+        }
+        let shift = st.m_step(&sums, &counts);
+        if !changed {
+            strict = true;
+            break;
+        }
+        if shift <= tol_abs {
+            break;
+        }
+    }
+    if !strict {
+        let slack = (1e-12 + 1e-15 * n_iter as f64) * diameter;
+        st.e_step(false, false, slack);
+    }
+    let inertia = st.inertia();
+    KMeansResult {
+        centers: st.centers,
+        labels: st.labels,
+        inertia,
+        n_iter,
+        k,
+        dim: d,
+    }
+}
+
+impl Lloyd<'_> {
+    /// Assign rows to centres; with `partials`, refresh the partial sums of chunks whose
+    /// labels changed. Returns whether any label changed (always true when `first`).
+    fn e_step(&mut self, first: bool, partials: bool, slack: f64) -> bool {
+        let (x, d, k, ch) = (self.x, self.d, self.k, self.chunk);
+        // Half the distance from each centre to its nearest other centre.
+        let half = self.half_separation();
+        // Largest and second largest drift, for the lower bounds.
+        let (mut p1, mut p2, mut arg1) = (0.0f64, 0.0f64, usize::MAX);
+        if self.pending_drift {
+            for (j, &p) in self.drift.iter().enumerate() {
+                if p > p1 {
+                    p2 = p1;
+                    p1 = p;
+                    arg1 = j;
+                } else if p > p2 {
+                    p2 = p;
+                }
+            }
+        }
+        let drift = if self.pending_drift { Some(&self.drift[..]) } else { None };
+        let (centers, panel) = (&self.centers, &self.panel);
+        let changed: Vec<bool> = self
+            .labels
+            .par_chunks_mut(ch)
+            .zip(self.upper.par_chunks_mut(ch))
+            .zip(self.lower.par_chunks_mut(ch))
+            .zip(self.psums.par_chunks_mut(k * d))
+            .zip(self.pcounts.par_chunks_mut(k))
+            .enumerate()
+            .map(|(b, ((((lab, up), lo), ps), pc))| {
+                let base = b * ch;
+                let mut changed = first;
+                let mut scan: Vec<usize> = Vec::new();
+                for i in 0..lab.len() {
+                    let a = lab[i] as usize;
+                    if let Some(p) = drift {
+                        up[i] += p[a];
+                        lo[i] -= if a == arg1 { p2 } else { p1 };
+                    }
+                    let m = half[a].max(lo[i]);
+                    if up[i] + slack < m {
+                        continue;
+                    }
+                    if up[i].is_finite() {
+                        let row = &x[(base + i) * d..(base + i + 1) * d];
+                        DBG_TIGHT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let u = sq_dist(row, &centers[a * d..(a + 1) * d]).sqrt();
+                        up[i] = u;
+                        if u + slack < m {
+                            continue;
+                        }
+                    }
+                    scan.push(i);
+                }
+                DBG_SCAN.fetch_add(scan.len(), std::sync::atomic::Ordering::Relaxed);
+                let kp = panel.kpad();
+                let mut buf = vec![0.0; GROUP.min(scan.len()) * kp];
+                for group in scan.chunks(GROUP) {
+                    let rows: Vec<&[f64]> =
+                        group.iter().map(|&i| &x[(base + i) * d..(base + i + 1) * d]).collect();
+                    sq_dists(&rows, panel, &mut buf);
+                    for (r, &i) in group.iter().enumerate() {
+                        let (best, bd, sd) = two_nearest(&buf[r * kp..r * kp + k]);
+                        if best as u32 != lab[i] {
+                            lab[i] = best as u32;
+                            changed = true;
+                        }
+                        up[i] = bd.sqrt();
+                        lo[i] = sd.sqrt();
+                    }
+                }
+                if partials && changed {
+                    ps.fill(0.0);
+                    pc.fill(0);
+                    for (i, &l) in lab.iter().enumerate() {
+                        let l = l as usize;
+                        let row = &x[(base + i) * d..(base + i + 1) * d];
+                        ps[l * d..(l + 1) * d].iter_mut().zip(row).for_each(|(s, v)| *s += v);
+                        pc[l] += 1;
+                    }
+                }
+                changed
+            })
+            .collect();
+        self.pending_drift = false;
+        changed.contains(&true)
+    }
+
+    /// `0.5 × min_{j' ≠ j} ‖c_j - c_j'‖` for every centre (`+inf` when k = 1).
+    fn half_separation(&self) -> Vec<f64> {
+        let (k, d) = (self.k, self.d);
+        let kp = self.panel.kpad();
+        (0..k)
+            .into_par_iter()
+            .with_min_len(16)
+            .map(|j| {
+                let row: [&[f64]; 1] = [&self.centers[j * d..(j + 1) * d]];
+                let mut buf = vec![0.0; kp];
+                sq_dists(&row, &self.panel, &mut buf);
+                let m = buf[..k]
+                    .iter()
+                    .enumerate()
+                    .filter(|&(i, _)| i != j)
+                    .fold(f64::INFINITY, |m, (_, &v)| m.min(v));
+                0.5 * m.sqrt()
+            })
+            .collect()
+    }
+
+    /// Totals of the per-chunk partial sums, added in chunk order.
+    fn reduce(&self, sums: &mut [f64], counts: &mut [u64]) {
+        let (k, d) = (self.k, self.d);
+        let nchunks = self.n.div_ceil(self.chunk);
+        sums.par_chunks_mut(d).zip(counts.par_iter_mut()).enumerate().for_each(|(j, (s, c))| {
+            s.fill(0.0);
+            *c = 0;
+            for b in 0..nchunks {
+                let p = &self.psums[(b * k + j) * d..(b * k + j + 1) * d];
+                s.iter_mut().zip(p).for_each(|(a, v)| *a += v);
+                *c += self.pcounts[b * k + j];
+            }
+        });
+    }
+
+    /// Re-seed empty clusters with the rows farthest from their own centre.
+    fn relocate_empty(&self, sums: &mut [f64], counts: &mut [u64]) {
+        let (x, d) = (self.x, self.d);
+        let dist: Vec<f64> = (0..self.n)
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(|i| {
+                let a = self.labels[i] as usize;
+                sq_dist(&x[i * d..(i + 1) * d], &self.centers[a * d..(a + 1) * d])
+            })
+            .collect();
+        if dist.iter().all(|&v| v == 0.0) {
+            return;
+        }
+        let empty: Vec<usize> = (0..self.k).filter(|&j| counts[j] == 0).collect();
+        let mut order: Vec<usize> = (0..self.n).collect();
+        let cmp = |a: &usize, b: &usize| dist[*b].total_cmp(&dist[*a]).then(a.cmp(b));
+        let m = empty.len().min(self.n);
+        if m < self.n {
+            order.select_nth_unstable_by(m, cmp);
+        }
+        order.truncate(m);
+        order.sort_by(cmp);
+        for (&j, &far) in empty.iter().zip(&order) {
+            let old = self.labels[far] as usize;
+            let row = &x[far * d..(far + 1) * d];
+            for t in 0..d {
+                sums[old * d + t] -= row[t];
+                sums[j * d + t] = row[t];
+            }
+            counts[old] -= 1;
+            counts[j] = 1;
+        }
+    }
+
+    /// New centres from the sums; records the drift and returns `Σ_j ‖Δc_j‖²`.
+    fn m_step(&mut self, sums: &[f64], counts: &[u64]) -> f64 {
+        let d = self.d;
+        let mut total = 0.0;
+        for j in 0..self.k {
+            let c = &mut self.centers[j * d..(j + 1) * d];
+            let mut sq = 0.0;
+            if counts[j] > 0 {
+                let alpha = 1.0 / counts[j] as f64;
+                for t in 0..d {
+                    let v = sums[j * d + t] * alpha;
+                    sq += (v - c[t]) * (v - c[t]);
+                    c[t] = v;
+                }
+            }
+            self.drift[j] = sq.sqrt();
+            total += sq;
+        }
+        self.panel.set(&self.centers, self.k);
+        self.pending_drift = true;
+        total
+    }
+
+    fn inertia(&self) -> f64 {
+        let (x, d, ch) = (self.x, self.d, self.chunk);
+        let parts: Vec<f64> = self
+            .labels
+            .par_chunks(ch)
+            .enumerate()
+            .map(|(b, lab)| {
+                lab.iter()
+                    .enumerate()
+                    .map(|(i, &l)| {
+                        let r = b * ch + i;
+                        let l = l as usize;
+                        let mut s = 0.0;
+                        for t in 0..d {
+                            let diff = x[r * d + t] - self.centers[l * d + t];
+                            s += diff * diff;
+                        }
+                        s
+                    })
+                    .sum()
+            })
+            .collect();
+        parts.iter().sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn blobs(n_per: usize, centres: &[[f64; 2]], spread: f64, seed: u64) -> Vec<f64> {
+        let mut rng = Rng::new(seed);
+        let mut x = Vec::new();
+        for c in centres {
+            for _ in 0..n_per {
+                x.push(c[0] + spread * (rng.uniform() - 0.5));
+                x.push(c[1] + spread * (rng.uniform() - 0.5));
+            }
+        }
+        x
+    }
+
+    /// Plain Lloyd (brute force, direct distances) with the same stopping rules.
+    fn reference(x: &[f64], n: usize, d: usize, init: &[f64], k: usize, max_iter: usize, tol: f64) -> (Vec<f64>, Vec<u32>, usize) {
+        let assign = |c: &[f64]| -> Vec<u32> {
+            (0..n)
+                .map(|i| {
+                    let dists: Vec<f64> = (0..k)
+                        .map(|j| {
+                            let mut acc = 0.0f64;
+                            for t in 0..d {
+                                let v = x[i * d + t] - c[j * d + t];
+                                acc = v.mul_add(v, acc);
+                            }
+                            acc
+                        })
+                        .collect();
+                    two_nearest(&dists).0 as u32
+                })
+                .collect()
+        };
+        let tol_abs = tol * mean_variance(x, n, d);
+        let mut c = init.to_vec();
+        let mut old: Option<Vec<u32>> = None;
+        let mut labels = Vec::new();
+        let mut it = 0;
+        let mut strict = false;
+        while it < max_iter {
+            it += 1;
+            labels = assign(&c);
+            let mut sums = vec![0.0; k * d];
+            let mut cnt = vec![0usize; k];
+            for i in 0..n {
+                let l = labels[i] as usize;
+                cnt[l] += 1;
+                for t in 0..d {
+                    sums[l * d + t] += x[i * d + t];
+                }
+            }
+            let mut shift = 0.0;
+            for j in 0..k {
+                if cnt[j] > 0 {
+                    for t in 0..d {
+                        let v = sums[j * d + t] * (1.0 / cnt[j] as f64);
+                        shift += (v - c[j * d + t]).powi(2);
+                        c[j * d + t] = v;
+                    }
+                }
+            }
+            if old.as_ref() == Some(&labels) {
+                strict = true;
+                break;
+            }
+            if shift <= tol_abs {
+                break;
+            }
+            old = Some(labels.clone());
+        }
+        if !strict {
+            labels = assign(&c);
+        }
+        (c, labels, it)
+    }
+
+    #[test]
+    fn finds_separated_blobs() {
+        let centres = [[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]];
+        let x = blobs(100, &centres, 1.0, 1);
+        let res = kmeans(&x, 300, 2, &KMeansParams { n_init: 3, ..KMeansParams::new(3) }, None).unwrap();
+        for i in 0..3 {
+            // All rows of one blob share a label, and the blobs have different labels.
+            let l = res.labels[i * 100];
+            assert!(res.labels[i * 100..(i + 1) * 100].iter().all(|&v| v == l));
+            let c = &res.centers[l as usize * 2..l as usize * 2 + 2];
+            assert!((c[0] - centres[i][0]).abs() < 0.2 && (c[1] - centres[i][1]).abs() < 0.2);
+        }
+        // Variance of U(-0.5, 0.5) is 1/12 per coordinate: inertia ≈ 300 · 2 / 12.
+        assert!((res.inertia - 50.0).abs() < 10.0, "{}", res.inertia);
+    }
+
+    #[test]
+    fn matches_plain_lloyd_from_the_same_start() {
+        let mut rng = Rng::new(3);
+        for &(n, d, k) in &[(500usize, 3usize, 7usize), (2500, 5, 20), (3000, 2, 1), (1200, 30, 40)] {
+            let x: Vec<f64> = (0..n * d).map(|_| rng.uniform() * 10.0).collect();
+            let init: Vec<f64> = x[..k * d].to_vec();
+            for &(max_iter, tol) in &[(300usize, 0.0), (300, 1e-4), (3, 1e-4)] {
+                let p = KMeansParams { max_iter, tol, ..KMeansParams::new(k) };
+                let res = kmeans(&x, n, d, &p, Some(&init)).unwrap();
+                let (c, l, it) = reference(&x, n, d, &init, k, max_iter, tol);
+                assert_eq!(res.labels, l, "n={n} k={k} max_iter={max_iter} tol={tol}");
+                assert_eq!(res.n_iter, it);
+                for (a, b) in res.centers.iter().zip(&c) {
+                    assert!((a - b).abs() <= 1e-12 * 10.0);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn empty_cluster_is_reseeded_with_the_farthest_row() {
+        // Two far-apart centres start on the same side; the second gets no row at first.
+        let x = vec![0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 20.0, 0.0];
+        let init = vec![0.5, 0.5, 100.0, 100.0];
+        let res = kmeans(&x, 4, 2, &KMeansParams::new(2), Some(&init)).unwrap();
+        // Row 3 (20, 0) is farthest from the first centre: it becomes the second cluster.
+        assert_eq!(res.labels, vec![0, 0, 0, 1]);
+        assert_eq!(&res.centers[2..], &[20.0, 0.0]);
+        assert!((res.centers[0] - 1.0 / 3.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn duplicate_rows_fewer_than_k() {
+        let x = vec![1.0, 1.0, 1.0, 1.0, 1.0, 1.0];
+        let res = kmeans(&x, 3, 2, &KMeansParams::new(2), None).unwrap();
+        assert_eq!(res.inertia, 0.0);
+    }
+
+    #[test]
+    fn identical_results_for_any_thread_count_and_best_of_n_init() {
+        let mut rng = Rng::new(9);
+        let (n, d) = (5000, 4);
+        let x: Vec<f64> = (0..n * d).map(|_| rng.uniform()).collect();
+        let p = KMeansParams { n_init: 3, seed: 11, ..KMeansParams::new(25) };
+        let run = |t: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
+            pool.install(|| kmeans(&x, n, d, &p, None).unwrap())
+        };
+        let one = run(1);
+        assert_eq!(one, run(3));
+        let single: Vec<f64> = (0..3)
+            .map(|r| {
+                let q = KMeansParams { n_init: 1, seed: 11, ..p.clone() };
+                let mut rng = Rng::new(run_seed(q.seed, r));
+                let (c, _) = kmeans_plusplus(&x, n, d, 25, default_local_trials(25), &mut rng);
+                kmeans(&x, n, d, &q, Some(&c)).unwrap().inertia
+            })
+            .collect();
+        assert_eq!(one.inertia, single.iter().cloned().fold(f64::INFINITY, f64::min));
+    }
+
+    #[test]
+    fn predict_nearest_and_ties() {
+        let centers = vec![0.0, 0.0, 2.0, 0.0];
+        let x = vec![0.1, 0.0, 1.0, 0.0, 3.0, 1.0];
+        let (l, dist) = predict(&x, 3, 2, &centers, 2).unwrap();
+        assert_eq!(l, vec![0, 0, 1]);
+        assert!((dist[0] - 0.01).abs() < 1e-15 && dist[1] == 1.0 && dist[2] == 2.0);
+    }
+
+    #[test]
+    fn errors() {
+        let x = vec![0.0; 10];
+        let p = KMeansParams::new(2);
+        assert!(matches!(kmeans(&[], 0, 2, &p, None), Err(Error::Shape(_))));
+        assert!(matches!(kmeans(&x, 5, 2, &KMeansParams::new(6), None), Err(Error::InvalidArgument(_))));
+        assert!(matches!(kmeans(&x, 5, 2, &KMeansParams::new(0), None), Err(Error::InvalidArgument(_))));
+        assert!(matches!(kmeans(&x, 5, 2, &KMeansParams { n_init: 0, ..p.clone() }, None), Err(Error::InvalidArgument(_))));
+        assert!(matches!(kmeans(&x, 5, 2, &KMeansParams { max_iter: 0, ..p.clone() }, None), Err(Error::InvalidArgument(_))));
+        assert!(matches!(kmeans(&x, 5, 2, &KMeansParams { tol: -1.0, ..p.clone() }, None), Err(Error::InvalidArgument(_))));
+        assert!(matches!(kmeans(&x, 5, 2, &KMeansParams { n_local_trials: Some(0), ..p.clone() }, None), Err(Error::InvalidArgument(_))));
+        assert!(matches!(kmeans(&x, 5, 2, &p, Some(&[0.0; 3])), Err(Error::Shape(_))));
+        assert!(matches!(kmeans(&x, 5, 2, &KMeansParams { n_init: 2, ..p.clone() }, Some(&[0.0; 4])), Err(Error::InvalidArgument(_))));
+        let mut bad = x.clone();
+        bad[3] = f64::NAN;
+        assert!(matches!(kmeans(&bad, 5, 2, &p, None), Err(Error::NonFinite(_))));
+        assert!(matches!(kmeans(&x, 5, 2, &p, Some(&[0.0, 0.0, f64::INFINITY, 0.0])), Err(Error::NonFinite(_))));
+        assert!(matches!(predict(&x, 5, 2, &[], 0), Err(Error::Shape(_))));
+        assert!(matches!(predict(&x, 5, 2, &[0.0; 3], 2), Err(Error::Shape(_))));
+    }
+}

@@ -15,6 +15,8 @@ pub mod zvc;
 pub mod covariance;
 pub mod eigh;
 pub mod kmeans;
+pub mod kmeanspp;
+pub mod sqdist;
 
 pub use error::{Error, Result};
 

@@ -159,9 +159,14 @@ def imitation_experiment(
     -------
     list of Trial
         Ordered by subject, then stimulus; ``name`` ``"sSS_mMM"`` (0-based ids), integer
-        ``subject`` and ``stimulus``, ``repetitions``, ``truth`` (angles (T, 4) rad,
-        boundaries s, labels, repetitions) and ``meta`` (frame period, segment lengths in
-        m, the noise-free joint centres ``true_joints`` (T, 3, 3) in m, ...).
+        ``subject`` and ``stimulus``, ``repetitions``, ``truth`` and ``meta`` (frame
+        period, segment lengths in m, the noise-free joint centres ``true_joints``
+        (T, 3, 3) in m, ...). ``truth.angles`` (T, 4) rad are the true angles at the sample
+        instants; ``truth.boundaries`` (s) are the start of the first stroke, the instant
+        between consecutive strokes (the middle of the pause when the subject paused) and
+        the end of the last stroke; ``truth.labels`` index
+        :data:`~visprim.datasets.vocabulary.VOCABULARY`. ``trial.joints`` is None: like
+        the original sensors, the generator reports markers only.
     """
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")

@@ -85,12 +85,12 @@ def sample_times(
     """Sample instants (s) covering ``[0, duration]`` every ``m.frame_period_s``, jittered
     with ``rng`` (None: exactly periodic)."""
     n = int(np.floor(duration / m.frame_period_s)) + 1
-    times: NDArray[np.float64] = np.arange(n) * m.frame_period_s
+    times = np.arange(n, dtype=np.float64) * m.frame_period_s
     if rng is not None:
         limit = 3 * m.jitter_sd_s
         jitter = np.clip(rng.normal(0.0, m.jitter_sd_s, size=n), -limit, limit)
         jitter[0] = 0.0
-        times = times + jitter
+        times += jitter
     return times
 
 

@@ -3,7 +3,7 @@
 >>> from visprim.io import read, read_many
 >>> trial = read("wave.bvh")                      # right arm, format from the extension
 >>> trial = read("05_02.amc", skeleton="05.asf", rate=120)
->>> trials = read_many(["../shared/data"], recursive=True, resample=0.034)
+>>> trials = read_many(["../shared/data"], resample=0.034)  # every recording, subfolders too
 
 Every trial is in the common frame of :mod:`visprim.trial` — metres, +z up, the subject facing
 +x at the first frame (when the torso is known), +y to the subject's left — with
@@ -73,7 +73,9 @@ __all__ = [
 #: Supported extensions (lower case) → format name.
 FORMATS: dict[str, str] = {".bvh": "bvh", ".amc": "amc", ".c3d": "c3d", ".csv": "csv"}
 
-_BANDAI = re.compile(r"^dataset-(?P<dataset>\d+)_(?P<content>[a-z0-9-]+)_(?P<style>[a-z]+)_(?P<take>\d+)$")
+_BANDAI = re.compile(
+    r"^dataset-(?P<dataset>\d+)_(?P<content>[a-z0-9-]+)_(?P<style>[a-z]+)_(?P<take>\d+)$"
+)
 
 
 def labels_from_name(stem: str) -> dict[str, Any]:
@@ -184,9 +186,20 @@ def read_pieces(
         trials = [_read_csv(p, arm, repetitions)]
     else:
         recs = _read_arm(
-            p, fmt, arm, skeleton=skeleton, rate=rate, mapping=mapping, preset=preset,
-            up_axis=up_axis, units=units, markers=markers, max_gap=max_gap, on_gap=on_gap,
-            gap_method=gap_method, min_duration=min_duration,
+            p,
+            fmt,
+            arm,
+            skeleton=skeleton,
+            rate=rate,
+            mapping=mapping,
+            preset=preset,
+            up_axis=up_axis,
+            units=units,
+            markers=markers,
+            max_gap=max_gap,
+            on_gap=on_gap,
+            gap_method=gap_method,
+            min_duration=min_duration,
         )
         heading = align_heading(recs)
         if mirror:
@@ -243,7 +256,9 @@ def read(path: str | os.PathLike[str], arm: str = "right", **options: Any) -> Tr
 _FORMAT_OPTIONS = {"skeleton": "amc", "rate": "amc", "units": "bvh"}
 
 
-def _expand(sources: str | os.PathLike[str] | Iterable[str | os.PathLike[str]], recursive: bool) -> list[Path]:
+def _expand(
+    sources: str | os.PathLike[str] | Iterable[str | os.PathLike[str]], recursive: bool
+) -> list[Path]:
     items = [sources] if isinstance(sources, (str, os.PathLike)) else list(sources)
     out: list[Path] = []
     for item in items:
@@ -253,8 +268,9 @@ def _expand(sources: str | os.PathLike[str] | Iterable[str | os.PathLike[str]], 
             found = sorted(f for f in walk if f.is_file() and f.suffix.lower() in FORMATS)
             if not found:
                 raise ReadError(
-                    p, f"no recordings ({', '.join(sorted(FORMATS))}) in this folder"
-                    + ("" if recursive else " (recursive=True searches subfolders)")
+                    p,
+                    f"no recordings ({', '.join(sorted(FORMATS))}) in this folder"
+                    + ("" if recursive else " (recursive=True searches subfolders)"),
                 )
             out.extend(found)
         elif p.exists():
@@ -281,14 +297,15 @@ def read_many(
     sources: str | os.PathLike[str] | Iterable[str | os.PathLike[str]],
     arm: str = "right",
     *,
-    recursive: bool = False,
+    recursive: bool = True,
     on_error: str = "raise",
     **options: Any,
 ) -> list[Trial]:
     """Read files, folders and glob patterns into one flat list of trials.
 
-    Folders contribute their .bvh/.amc/.c3d/.csv files (sorted; ``recursive=True`` for
-    subfolders; other files such as README.md, .asf skeletons and licences are skipped);
+    Folders contribute their .bvh/.amc/.c3d/.csv files, subfolders included unless
+    ``recursive=False`` (sorted; other files such as README.md, .asf skeletons and licences
+    are skipped);
     patterns are expanded with :func:`glob.glob`. Recordings split by long gaps contribute
     every piece. Options are those of :func:`read_pieces`; format-specific ones (``skeleton``,
     ``rate`` for AMC, ``units`` for BVH) are only passed to files of that format.
@@ -300,7 +317,9 @@ def read_many(
     for path in _expand(sources, recursive):
         fmt = FORMATS[path.suffix.lower()]
         opts = {
-            k: v for k, v in options.items() if k not in _FORMAT_OPTIONS or _FORMAT_OPTIONS[k] == fmt
+            k: v
+            for k, v in options.items()
+            if k not in _FORMAT_OPTIONS or _FORMAT_OPTIONS[k] == fmt
         }
         try:
             trials.extend(read_pieces(path, arm, **opts))
@@ -317,7 +336,11 @@ def _read_arm(p: Path, fmt: str, arm: str, **kw: Any) -> list[ArmRecording]:
 
         return [
             read_bvh_arm(
-                p, arm, preset=kw["preset"], mapping=kw["mapping"], up_axis=kw["up_axis"],
+                p,
+                arm,
+                preset=kw["preset"],
+                mapping=kw["mapping"],
+                up_axis=kw["up_axis"],
                 units=kw["units"],
             )
         ]
@@ -326,16 +349,28 @@ def _read_arm(p: Path, fmt: str, arm: str, **kw: Any) -> list[ArmRecording]:
 
         return [
             read_amc_arm(
-                p, arm, skeleton=kw["skeleton"], rate=kw["rate"], preset=kw["preset"],
-                mapping=kw["mapping"], up_axis=kw["up_axis"],
+                p,
+                arm,
+                skeleton=kw["skeleton"],
+                rate=kw["rate"],
+                preset=kw["preset"],
+                mapping=kw["mapping"],
+                up_axis=kw["up_axis"],
             )
         ]
     from visprim.io.c3d import read_c3d_arm
 
     return read_c3d_arm(
-        p, arm, preset=kw["preset"], mapping=kw["mapping"], up_axis=kw["up_axis"],
-        markers=kw["markers"], max_gap=kw["max_gap"], on_gap=kw["on_gap"],
-        gap_method=kw["gap_method"], min_duration=kw["min_duration"],
+        p,
+        arm,
+        preset=kw["preset"],
+        mapping=kw["mapping"],
+        up_axis=kw["up_axis"],
+        markers=kw["markers"],
+        max_gap=kw["max_gap"],
+        on_gap=kw["on_gap"],
+        gap_method=kw["gap_method"],
+        min_duration=kw["min_duration"],
     )
 
 
@@ -353,4 +388,4 @@ def _read_csv(p: Path, arm: str, repetitions: int | None) -> Trial:
     except ValueError as exc:
         msg = str(exc)
         prefix = f"{p}: "
-        raise MalformedFileError(p, msg[len(prefix):] if msg.startswith(prefix) else msg) from exc
+        raise MalformedFileError(p, msg[len(prefix) :] if msg.startswith(prefix) else msg) from exc

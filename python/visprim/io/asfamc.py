@@ -26,6 +26,7 @@ import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -109,7 +110,9 @@ def _read_text(path: str) -> list[str]:
     try:
         text = Path(path).read_text(encoding="utf-8-sig", errors="strict")
     except UnicodeDecodeError as exc:
-        raise MalformedFileError(path, f"not a text file ({exc.reason} at byte {exc.start})") from None
+        raise MalformedFileError(
+            path, f"not a text file ({exc.reason} at byte {exc.start})"
+        ) from None
     except OSError as exc:
         raise ReadError(path, f"cannot read: {exc.strerror or exc}") from None
     if not text.strip():
@@ -119,7 +122,9 @@ def _read_text(path: str) -> list[str]:
 
 def _floats(path: str, line_no: int, tokens: Sequence[str], n: int, what: str) -> list[float]:
     if len(tokens) < n:
-        raise MalformedFileError(path, f"line {line_no}: {what} needs {n} numbers, got {len(tokens)}")
+        raise MalformedFileError(
+            path, f"line {line_no}: {what} needs {n} numbers, got {len(tokens)}"
+        )
     try:
         vals = [float(t) for t in tokens[:n]]
     except ValueError:
@@ -150,8 +155,8 @@ def parse_asf(path: str | os.PathLike[str]) -> AsfSkeleton:
     root_axis = "XYZ"
     root_position = np.zeros(3)
     root_orientation = np.zeros(3)
-    raw_bones: list[dict[str, object]] = []
-    current: dict[str, object] | None = None
+    raw_bones: list[dict[str, Any]] = []
+    current: dict[str, Any] | None = None
     hierarchy: list[tuple[int, list[str]]] = []
     in_hier = False
     seen: set[str] = set()
@@ -193,7 +198,9 @@ def parse_asf(path: str | os.PathLike[str]) -> AsfSkeleton:
         elif section == "bonedata":
             if key == "begin":
                 if current is not None:
-                    raise MalformedFileError(path, f"line {n}: 'begin' inside a bone (missing 'end')")
+                    raise MalformedFileError(
+                        path, f"line {n}: 'begin' inside a bone (missing 'end')"
+                    )
                 current = {"line": n}
             elif key == "end":
                 if current is None:
@@ -214,7 +221,9 @@ def parse_asf(path: str | os.PathLike[str]) -> AsfSkeleton:
                 current["axis"] = _floats(path, n, toks[1:], 3, "axis")
                 order = toks[4].upper() if len(toks) > 4 else "XYZ"
                 if sorted(order) != ["X", "Y", "Z"]:
-                    raise MalformedFileError(path, f"line {n}: axis order {order!r} is not XYZ-like")
+                    raise MalformedFileError(
+                        path, f"line {n}: axis order {order!r} is not XYZ-like"
+                    )
                 current["axis_order"] = order
             elif key == "dof":
                 dof = tuple(t.lower() for t in toks[1:])
@@ -246,60 +255,60 @@ def parse_asf(path: str | os.PathLike[str]) -> AsfSkeleton:
             dof=tuple(t for t in root_order),
         )
     ]
-    for b in raw_bones:
-        line = b["line"]
+    for blk in raw_bones:
+        at = blk["line"]
         for attr in ("name", "direction", "length"):
-            if attr not in b:
-                raise MalformedFileError(path, f"line {line}: bone block without {attr!r}")
-        d = np.array(b["direction"], dtype=float)
+            if attr not in blk:
+                raise MalformedFileError(path, f"line {at}: bone block without {attr!r}")
+        d = np.array(blk["direction"], dtype=float)
         norm = float(np.linalg.norm(d))
-        length = float(b["length"])  # type: ignore[arg-type]
+        length = float(blk["length"])
+        bname = str(blk["name"])
         if length < 0:
-            raise MalformedFileError(path, f"line {line}: bone {b['name']} has negative length")
+            raise MalformedFileError(path, f"line {at}: bone {bname} has negative length")
         if norm == 0.0 and length > 0:
-            raise MalformedFileError(path, f"line {line}: bone {b['name']} has a zero direction")
-        bname = str(b["name"])
+            raise MalformedFileError(path, f"line {at}: bone {bname} has a zero direction")
         if any(x.name == bname for x in bones):
-            raise MalformedFileError(path, f"line {line}: bone name {bname!r} is repeated")
+            raise MalformedFileError(path, f"line {at}: bone name {bname!r} is repeated")
         bones.append(
             AsfBone(
                 name=bname,
                 direction=d / norm if norm > 0 else d,
                 length=length,
-                axis=np.array(b.get("axis", [0.0, 0.0, 0.0]), dtype=float) * to_rad,
-                axis_order=str(b.get("axis_order", "XYZ")),
-                dof=tuple(b.get("dof", ())),  # type: ignore[arg-type]
+                axis=np.array(blk.get("axis", [0.0, 0.0, 0.0]), dtype=float) * to_rad,
+                axis_order=str(blk.get("axis_order", "XYZ")),
+                dof=tuple(blk.get("dof", ())),
             )
         )
-    index = {b.name: i for i, b in enumerate(bones)}
-    for line, toks in hierarchy:
+    index = {bone.name: i for i, bone in enumerate(bones)}
+    for at, toks in hierarchy:
         for t in toks:
             if t not in index:
-                raise MalformedFileError(path, f"line {line}: hierarchy names unknown bone {t!r}")
-        p = index[toks[0]]
+                raise MalformedFileError(path, f"line {at}: hierarchy names unknown bone {t!r}")
+        parent = index[toks[0]]
         for child in toks[1:]:
             c = index[child]
             if c == 0 or bones[c].parent >= 0:
-                raise MalformedFileError(path, f"line {line}: bone {child!r} has two parents")
-            bones[c].parent = p
-    orphans = [b.name for b in bones[1:] if b.parent < 0]
+                raise MalformedFileError(path, f"line {at}: bone {child!r} has two parents")
+            bones[c].parent = parent
+    orphans = [bone.name for bone in bones[1:] if bone.parent < 0]
     if orphans:
         raise MalformedFileError(path, f"bones not in the hierarchy: {', '.join(orphans)}")
-    # Parents must precede children for forward kinematics: reorder topologically.
-    order = [0]
+    # Parents must precede children for forward kinematics: reorder breadth-first.
+    topo = [0]
     children: dict[int, list[int]] = {}
-    for i, b in enumerate(bones[1:], start=1):
-        children.setdefault(b.parent, []).append(i)
+    for i, bone in enumerate(bones[1:], start=1):
+        children.setdefault(bone.parent, []).append(i)
     k = 0
-    while k < len(order):
-        order.extend(children.get(order[k], []))
+    while k < len(topo):
+        topo.extend(children.get(topo[k], []))
         k += 1
-    if len(order) != len(bones):
+    if len(topo) != len(bones):
         raise MalformedFileError(path, "the hierarchy has a cycle")
-    remap = {old: new for new, old in enumerate(order)}
-    sorted_bones = [bones[i] for i in order]
-    for b in sorted_bones:
-        b.parent = remap[b.parent] if b.parent >= 0 else -1
+    remap = {old: new for new, old in enumerate(topo)}
+    sorted_bones = [bones[i] for i in topo]
+    for bone in sorted_bones:
+        bone.parent = remap[bone.parent] if bone.parent >= 0 else -1
     return AsfSkeleton(
         path=path,
         name=name,
@@ -560,7 +569,10 @@ def read_amc_arm(
     if roles.has("trunk_low", "trunk_high", "lateral_right", "lateral_left"):
         chest = rots[:, roles.index["chest"]] if roles.has("chest") else None  # type: ignore[index]
         body = torso_frame(
-            p("trunk_low"), p("trunk_high"), p("lateral_right"), p("lateral_left"),
+            p("trunk_low"),
+            p("trunk_high"),
+            p("lateral_right"),
+            p("lateral_left"),
             chest_rotation=chest,
         )
     up = check_up_axis(up_axis) if up_axis is not None else "+y"

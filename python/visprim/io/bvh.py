@@ -201,7 +201,8 @@ def _parse_hierarchy(path: str, lines: list[str]) -> list[BvhJoint]:
                 ch, ch_line = toks.next("a channel name")
                 if ch.lower() not in _CHANNELS:
                     raise MalformedFileError(
-                        path, f"line {ch_line}: unknown channel {ch!r} (joint {joints[current].name})"
+                        path,
+                        f"line {ch_line}: unknown channel {ch!r} (joint {joints[current].name})",
                     )
                 chans.append(ch.lower())
             if len(set(chans)) != len(chans):
@@ -249,7 +250,9 @@ def parse_bvh(path: str | os.PathLike[str]) -> BvhData:
     try:
         text = Path(path).read_text(encoding="utf-8-sig", errors="strict")
     except UnicodeDecodeError as exc:
-        raise MalformedFileError(path, f"not a text file ({exc.reason} at byte {exc.start})") from None
+        raise MalformedFileError(
+            path, f"not a text file ({exc.reason} at byte {exc.start})"
+        ) from None
     except OSError as exc:
         raise ReadError(path, f"cannot read: {exc.strerror or exc}") from None
     lines = text.splitlines()
@@ -423,11 +426,7 @@ def write_bvh(path: str | os.PathLike[str], data: BvhData, precision: int = 6) -
     children: dict[int, list[int]] = {}
     for j, joint in enumerate(data.joints):
         children.setdefault(joint.parent, []).append(j)
-    names = {v: k for k, v in _CHANNELS.items()}
-    pretty = {
-        ch: ("X", "Y", "Z")[names[ch][1]] + ("position" if names[ch][0] == "pos" else "rotation")
-        for ch in _CHANNELS
-    }
+    pretty = {ch: ch[0].upper() + ch[1:] for ch in _CHANNELS}  # 'xrotation' -> 'Xrotation'
     out: list[str] = ["HIERARCHY"]
 
     def emit(j: int, depth: int) -> None:
@@ -523,7 +522,7 @@ def read_bvh_arm(
     up = check_up_axis(up_axis) if up_axis is not None else "+y"
     a = up_rotation(up)
     rec = ArmRecording(
-        times=np.arange(data.n_frames) * data.frame_time,
+        times=np.arange(data.n_frames, dtype=np.float64) * data.frame_time,
         joints=np.stack([shoulder, elbow, wrist], axis=1) * scale,
         finger=finger * scale,
         body_frame=body,

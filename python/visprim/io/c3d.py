@@ -9,10 +9,14 @@
   vectors low → high (``up_low``/``up_high``, e.g. T10 → C7, XIPH → STER) must point clearly
   (≥ 1.5× the next component) along one axis; else the preset's documented default;
   else a :class:`~visprim.io.errors.ReadError` asks for ``up_axis``.
-* Joint centres. Shoulder: a ``shoulder`` marker as is, or the ``acromion`` moved down the
-  torso's vertical (the thorax axis when the torso markers give one, else the lab vertical)
-  by ``shoulder_drop`` metres — by default 17 % of the biacromial width when both acromia are
-  marked (Rab et al. 2002, Gait & Posture 15:113), else 0.06 m (17 % of a typical 0.36 m).
+* Joint centres. Shoulder: a ``shoulder`` marker as is, or the ``acromion`` moved
+  ``shoulder_drop`` metres down the thorax axis when thorax markers give one, else along the
+  acromion → elbow line (the glenohumeral centre lies near the humeral axis below the
+  acromion; the lab vertical is no substitute for a leaning trunk — in the Kinetics Toolkit
+  racing file the acromion-to-elbow distance stays within 2 mm, as if the probed landmark
+  moved with the arm). The drop is by default 17 % of the biacromial width when both acromia
+  are marked (Rab et al. 2002, Gait & Posture 15:113), else 0.06 m (17 % of a typical
+  0.36 m).
   Elbow and wrist: centroid of the listed landmarks (mid-epicondyles, mid-styloids; Plug-in
   Gait marks only the lateral epicondyle, RELB, so its elbow centre is ~3–4 cm lateral).
   Finger: the listed marker(s) (RFIN = 3rd metacarpal head); without one, the wrist plus
@@ -171,7 +175,9 @@ def _resolve(
 
     if preset is not None:
         tries: list[tuple[str, MarkerPreset | None]] = [(preset, MARKER_PRESETS[preset])]
-    elif user and ("shoulder" in user or "acromion" in user) and "elbow" in user and "wrist" in user:
+    elif (
+        user and ("shoulder" in user or "acromion" in user) and "elbow" in user and "wrist" in user
+    ):
         tries = [("mapping", None), *MARKER_PRESETS.items()]
     else:
         tries = list(MARKER_PRESETS.items())
@@ -193,7 +199,8 @@ def _resolve(
     sample = ", ".join(strip_namespace(x) for x in list(labels)[:15])
     raise MissingPointError(
         path,
-        f"cannot find the {arm} arm's markers; tried " + " | ".join(report)
+        f"cannot find the {arm} arm's markers; tried "
+        + " | ".join(report)
         + f". The file's markers: {sample}{' ...' if len(labels) > 15 else ''}. "
         "Pass mapping={'acromion' or 'shoulder': ..., 'elbow': [...], 'wrist': [...], "
         "'finger': ...} to name them.",
@@ -206,8 +213,8 @@ def _centroid(points: NDArray[np.float64], tolerant: bool) -> NDArray[np.float64
         return points[:, 0]
     if not tolerant:
         return points.mean(axis=1)
-    vis = np.isfinite(points).all(axis=2)
-    full = vis.all(axis=1)
+    vis = np.asarray(np.isfinite(points).all(axis=2), dtype=bool)
+    full = np.asarray(vis.all(axis=1), dtype=bool)
     if full.any():
         centre = points[full].mean(axis=1, keepdims=True)
         offsets = (points[full] - centre).mean(axis=0)  # (k, 3)
@@ -272,7 +279,9 @@ def read_c3d_arm(
     n_frames = pts.shape[2]
     if n_frames < 2:
         raise ReadError(path, f"a trial needs at least 2 frames, the file has {n_frames}")
-    rate = float(np.ravel(_param(c3d, "POINT", "RATE") or [c3d["header"]["points"]["frame_rate"]])[0])
+    rate = float(
+        np.ravel(_param(c3d, "POINT", "RATE") or [c3d["header"]["points"]["frame_rate"]])[0]
+    )
     if not np.isfinite(rate) or rate <= 0:
         raise MalformedFileError(path, f"POINT:RATE is {rate!r}, not a positive rate")
     unit_raw = _param(c3d, "POINT", "UNITS")
@@ -297,9 +306,7 @@ def read_c3d_arm(
     used_roles = [r for r, ix in roles.items() if ix]
     if markers == "virtual":
         used_roles = [r for r in used_roles if r not in ("upper_arm", "forearm")]
-    role_pts = {
-        r: _centroid(xyz[:, roles[r]], tolerant=r in _CLUSTER_ROLES) for r in used_roles
-    }
+    role_pts = {r: _centroid(xyz[:, roles[r]], tolerant=r in _CLUSTER_ROLES) for r in used_roles}
 
     # Up axis.
     if up_axis is not None:
@@ -349,14 +356,14 @@ def read_c3d_arm(
         "up_axis_in_file": up,
         "up_axis_from": up_from,
         "preset": preset_name,
-        "marker_names": {
-            r: [labels[i] for i in roles[r]] for r in gap_roles
-        },
+        "marker_names": {r: [labels[i] for i in roles[r]] for r in gap_roles},
         "subject": prefixes[0] if len(prefixes) == 1 else None,
         "n_markers_file": len(labels),
         "n_analog_channels": 0 if analog_labels is None else len(analog_labels),
         "analog_rate_hz": (
-            float(np.ravel(analog_rate)[0]) if analog_rate is not None and np.size(analog_rate) else None
+            float(np.ravel(analog_rate)[0])
+            if analog_rate is not None and np.size(analog_rate)
+            else None
         ),
         "gaps": report.as_dict(),
         "markers": markers,
@@ -424,7 +431,11 @@ def _piece(
         meta["shoulder_from"] = "shoulder marker"
     else:
         acro = rp["acromion"]
-        down = -(body[:, :, 2] if (body is not None and thorax_z) else np.array([0.0, 0.0, 1.0]))
+        if body is not None and thorax_z:
+            down = -body[:, :, 2]
+        else:
+            arm_axis = rp["elbow"] - acro
+            down = arm_axis / np.linalg.norm(arm_axis, axis=1, keepdims=True)
         if shoulder_drop is not None:
             drop = float(shoulder_drop)
             why = "argument"
@@ -437,7 +448,7 @@ def _piece(
         shoulder = acro + drop * down
         meta["shoulder_from"] = (
             f"acromion moved {drop:.3f} m down the "
-            + ("thorax axis" if (body is not None and thorax_z) else "lab vertical")
+            + ("thorax axis" if (body is not None and thorax_z) else "acromion → elbow line")
             + f" ({why})"
         )
     elbow, wrist = rp["elbow"], rp["wrist"]

@@ -117,7 +117,7 @@ def fill_and_split(
     check_gap_options(max_gap, on_gap, method)
     n = times.shape[0]
     period = float(np.median(np.diff(times))) if n > 1 else 0.0
-    valid = np.isfinite(points).all(axis=2)
+    valid = np.asarray(np.isfinite(points).all(axis=2), dtype=bool)
     report = GapReport()
     cut = np.zeros(n, dtype=bool)
     long_mask = np.zeros(n, dtype=bool)
@@ -142,7 +142,7 @@ def fill_and_split(
     pieces: list[tuple[int, int, NDArray[np.float64]]] = []
     for a, b in missing_runs(~cut):
         # Trim frames at the piece's ends where some point is missing (never extrapolate).
-        ok_rows = valid[a:b].all(axis=1)
+        ok_rows = np.asarray(valid[a:b].all(axis=1), dtype=bool)
         if not ok_rows.any():
             report.trimmed_frames += b - a
             continue
@@ -165,8 +165,8 @@ def fill_and_split(
         pieces.append((a, b, piece))
     if report.dropped_pieces:
         warnings.warn(
-            f"{path}: dropped {len(report.dropped_pieces)} piece(s) shorter than "
-            f"min_duration={min_duration:g} s between long gaps",
+            f"{path}: dropped {len(report.dropped_pieces)} piece(s) between long gaps, "
+            f"shorter than min_duration={min_duration:g} s or 2 frames",
             stacklevel=3,
         )
     if not pieces:

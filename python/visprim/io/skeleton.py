@@ -111,7 +111,8 @@ def resolve_rig(
     sample = ", ".join(list(names)[:12]) + (" ..." if len(names) > 12 else "")
     raise MissingPointError(
         path,
-        f"cannot find the {arm} arm's {kind}s; tried " + "; ".join(report)
+        f"cannot find the {arm} arm's {kind}s; tried "
+        + "; ".join(report)
         + f". The file's {kind}s: {sample}. Pass mapping={{'shoulder': ..., 'elbow': ..., "
         "'wrist': ...}} to name them.",
     )

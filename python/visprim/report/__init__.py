@@ -16,7 +16,6 @@
 
 from __future__ import annotations
 
-import html as _html
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -24,14 +23,14 @@ from pathlib import Path
 
 import numpy as np
 
-from visprim.classify import classify_trials, score_against_truth
+from visprim.classify import score_against_truth
 from visprim.model import PrimitiveModel
 from visprim.preprocess import prepare_corpus
 from visprim.report import figures
 from visprim.report.html import Page, figure, paragraph, pre, table
 from visprim.segment import corpus_boundary_scores, seg2_trace, zvc
 from visprim.trial import Trial
-from visprim.vectors import corpus_vectors, to_curves
+from visprim.vectors import corpus_vectors, stretch, to_curves
 
 __all__ = ["Report", "segmentation_scores", "write_report"]
 
@@ -71,11 +70,16 @@ def segmentation_scores(
     return out
 
 
+def method_label(method: str) -> str:
+    """ "seg2" → "SEG-2"."""
+    return method.upper().replace("SEG", "SEG-")
+
+
 def format_segmentation_scores(scores: dict[str, tuple[float, float, float]]) -> str:
     """Scores as a small Markdown table."""
     lines = ["| method | precision | recall | F1 |", "|---|---:|---:|---:|"]
     for method, (p, r, f) in scores.items():
-        lines.append(f"| {method.upper()} | {p:.3f} | {r:.3f} | {f:.3f} |")
+        lines.append(f"| {method_label(method)} | {p:.3f} | {r:.3f} | {f:.3f} |")
     return "\n".join(lines) + "\n"
 
 
@@ -117,6 +121,8 @@ def write_report(
         Added to the page before the figures (e.g. the demo's console output).
     """
     model._check_fitted()
+    if trials and trial_name is not None and trial_name not in {t.name for t in trials}:
+        raise ValueError(f"report: no trial named {trial_name!r} among the {len(trials)} given")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     rep = Report(out_dir=out, index=out / "index.html")
@@ -125,8 +131,8 @@ def write_report(
     page.intro = paragraph(
         f"Model: {model.n_primitives} primitives (k-means clusters) in the space of the first "
         f"{model.n_components} eigenvectors of {model.n_training_segments_} training segments "
-        f"({params['segmentation'].upper()}), each resampled to {model.n_samples} samples per "
-        f"angle ({model.dim}-D vectors). Angles in degrees on all axes."
+        f"({method_label(params['segmentation'])}), each resampled to {model.n_samples} "
+        f"samples per angle ({model.dim}-D vectors). Angles in degrees on all axes."
     ) + pre("\n".join(f"{k} = {v!r}" for k, v in sorted(params.items())))
 
     for heading, text in extra_sections:
@@ -166,33 +172,46 @@ def write_report(
         rep.files.append(out / "segmentation_scores.md")
         page.add(
             "Scores against the ground truth",
-            paragraph(
-                f"Boundary precision / recall / F1 at ±100 ms over {len(trials)} trials:"
-            )
+            paragraph(f"Boundary precision / recall / F1 at ±100 ms over {len(trials)} trials:")
             + pre(text)
             + paragraph(f"Segment primitives vs true stroke labels: {cls}."),
         )
 
     # Model figures -------------------------------------------------------------------
-    f_eig = figures.plot_eigenvalues(out / "eigenvalues.png", model.eigenvalues_, model.n_components)
-    f_vec = figures.plot_eigenvectors(out / "eigenvectors.png", model.eigenvectors_, model.eigenvalues_)
+    f_eig = figures.plot_eigenvalues(
+        out / "eigenvalues.png", model.eigenvalues_, model.n_components
+    )
+    f_vec = figures.plot_eigenvectors(
+        out / "eigenvectors.png", model.eigenvectors_, model.eigenvalues_
+    )
     k = model.n_primitives
     prim = np.stack([model.primitive_angles(i) for i in range(k)])
     counts = np.bincount(model.labels_, minlength=k)
-    f_prim = figures.plot_primitives(out / "primitives.png", prim, counts, model.primitive_durations_)
+    f_prim = figures.plot_primitives(
+        out / "primitives.png", prim, counts, model.primitive_durations_
+    )
     rep.files += [f_eig, f_vec, f_prim]
     page.add(
         "Principal components",
-        figure(f_eig.name, "Eigenvalues of the covariance of the segment vectors (deg², log "
-               "scale) and the variance kept by the first f eigenvectors.")
-        + figure(f_vec.name, "The first four eigenvectors as four angle curves each, scaled "
-                 "by the square root of their eigenvalue (cf. the paper's Fig. 8)."),
+        figure(
+            f_eig.name,
+            "Eigenvalues of the covariance of the segment vectors (deg², log "
+            "scale) and the variance kept by the first f eigenvectors.",
+        )
+        + figure(
+            f_vec.name,
+            "The first four eigenvectors as four angle curves each, scaled "
+            "by the square root of their eigenvalue (cf. the paper's Fig. 8).",
+        ),
     )
     page.add(
         "Primitives",
-        figure(f_prim.name, "Cluster centres reconstructed as angle curves: the primitives "
-               "(cf. Fig. 9); titles give the number of member segments and their mean "
-               "duration."),
+        figure(
+            f_prim.name,
+            "Cluster centres reconstructed as angle curves: the primitives "
+            "(cf. Fig. 9); titles give the number of member segments and their mean "
+            "duration.",
+        ),
     )
 
     # Trial figures -------------------------------------------------------------------
@@ -246,7 +265,12 @@ def _trial_figures(
     c = zvc(times, angles, min_change_deg=float(model.zvc_threshold_deg))
     files.append(
         figures.plot_segmentation(
-            out / "segmentation.png", times, angles, c.time, c.dof, seg1_corpus.segments[0],
+            out / "segmentation.png",
+            times,
+            angles,
+            c.time,
+            c.dof,
+            seg1_corpus.segments[0],
             truth_boundaries=truth_b,
             title=f"Trial {name}: zero-velocity crossings (≥ {model.zvc_threshold_deg:g}° moves) "
             f"and SEG-1 segments",
@@ -257,7 +281,11 @@ def _trial_figures(
     trace = seg2_trace(times, angles, repetitions=trial.repetitions, threshold=thr)
     files.append(
         figures.plot_seg2(
-            out / "seg2_threshold.png", times, trace.z, trace.threshold, trace.segments,
+            out / "seg2_threshold.png",
+            times,
+            trace.z,
+            trace.threshold,
+            trace.segments,
             truth_boundaries=truth_b,
             title=f"Trial {name}: SEG-2 (z(t) below c delimits the segments)",
         )
@@ -269,7 +297,11 @@ def _trial_figures(
     ec = _rms_deg(rec_c, orig)
     files.append(
         figures.plot_reconstruction(
-            out / "movement_reconstruction.png", t_m, orig, rec_p, rec_c,
+            out / "movement_reconstruction.png",
+            t_m,
+            orig,
+            rec_p,
+            rec_c,
             boundaries=np.unique(trace.segments.ravel()),
             title=f"Trial {name}: whole movement from consecutive SEG-2 segments",
             errors_deg=(ep, ec),
@@ -283,8 +315,6 @@ def _trial_figures(
     p = model.transform(sv.vectors)
     mask = (times >= s) & (times <= e)
     tt = times[mask]
-    from visprim.vectors import stretch
-
     curve_p = to_curves(model._reconstruct_vectors(p, "projection"))[0]
     curve_c = to_curves(model._reconstruct_vectors(p, "cluster"))[0]
     label = int(model.assign(p)[0][0])
@@ -292,34 +322,47 @@ def _trial_figures(
     rc = stretch(curve_c, s, e, tt)
     files.append(
         figures.plot_reconstruction(
-            out / "segment_reconstruction.png", tt, angles[mask], rp, rc,
+            out / "segment_reconstruction.png",
+            tt,
+            angles[mask],
+            rp,
+            rc,
             title=f"Trial {name}, segment {j} ({s:.2f}–{e:.2f} s, primitive #{label})",
             errors_deg=(_rms_deg(rp, angles[mask]), _rms_deg(rc, angles[mask])),
         )
     )
     page.add(
         "Segmentation",
-        paragraph(f"Example trial: {name} ({trial.duration:.2f} s, repetitions "
-                  f"{trial.repetitions}).")
-        + figure("segmentation.png", "The four low-passed angles with each angle's "
-                 "zero-velocity crossings (dots) and the SEG-1 segments (shaded); dashed: true "
-                 "stroke boundaries where known (cf. the paper's Fig. 5).")
-        + figure("seg2_threshold.png", "z(t) = sum of squared angular velocities with the "
-                 "SEG-2 threshold c; the movement is cut inside each dip below c (cf. Fig. 6)."),
+        paragraph(
+            f"Example trial: {name} ({trial.duration:.2f} s, repetitions {trial.repetitions})."
+        )
+        + figure(
+            "segmentation.png",
+            "The four low-passed angles with each angle's "
+            "zero-velocity crossings (dots) and the SEG-1 segments (shaded); dashed: true "
+            "stroke boundaries where known (cf. the paper's Fig. 5).",
+        )
+        + figure(
+            "seg2_threshold.png",
+            "z(t) = sum of squared angular velocities with the "
+            "SEG-2 threshold c; the movement is cut inside each dip below c (cf. Fig. 6).",
+        ),
     )
     page.add(
         "Reconstruction",
-        figure("segment_reconstruction.png", "One segment and its reconstructions from its "
-               "projection on the first f eigenvectors and from its primitive (cluster "
-               "centre), stretched back to the segment's duration (cf. Fig. 10).")
-        + figure("movement_reconstruction.png", "A whole movement rebuilt from its "
-                 "consecutive SEG-2 segments (cf. Fig. 11)."),
+        figure(
+            "segment_reconstruction.png",
+            "One segment and its reconstructions from its "
+            "projection on the first f eigenvectors and from its primitive (cluster "
+            "centre), stretched back to the segment's duration (cf. Fig. 10).",
+        )
+        + figure(
+            "movement_reconstruction.png",
+            "A whole movement rebuilt from its consecutive SEG-2 segments (cf. Fig. 11).",
+        ),
     )
     return files
 
 
 def _rms_deg(a: np.ndarray, b: np.ndarray) -> float:
     return math.degrees(float(np.sqrt(np.mean((np.asarray(a) - np.asarray(b)) ** 2))))
-
-
-_ = _html  # html escaping lives in visprim.report.html

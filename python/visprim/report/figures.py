@@ -61,8 +61,9 @@ def plot_segmentation(
         ax.plot(t, a[:, j], color=_COLORS[j], lw=1.4)
         m = cd == j
         if np.any(m):
-            ax.plot(ct[m], np.interp(ct[m], t, a[:, j]), "o", ms=5, mfc="white", mec="k",
-                    label="ZVC")
+            ax.plot(
+                ct[m], np.interp(ct[m], t, a[:, j]), "o", ms=5, mfc="white", mec="k", label="ZVC"
+            )
         if truth_boundaries is not None:
             for b in np.asarray(truth_boundaries):
                 ax.axvline(b, color="k", ls="--", lw=0.8, alpha=0.6)
@@ -107,8 +108,14 @@ def plot_seg2(
         ax.axvline(b, color="tab:green", lw=1.2, label="SEG-2 boundary" if i == 0 else None)
     if truth_boundaries is not None:
         for i, b in enumerate(np.asarray(truth_boundaries)):
-            ax.axvline(b, color="k", ls="--", lw=0.8, alpha=0.6,
-                       label="true stroke boundary" if i == 0 else None)
+            ax.axvline(
+                b,
+                color="k",
+                ls="--",
+                lw=0.8,
+                alpha=0.6,
+                label="true stroke boundary" if i == 0 else None,
+            )
     ax.set_xlabel("time (s)")
     ax.set_ylabel("z (deg/s)²")
     ax.grid(alpha=0.3, which="both")
@@ -167,7 +174,11 @@ def _curves_grid(
         if i >= n:
             ax.set_axis_off()
             continue
-        x = x_pct if durations is None else np.linspace(0, float(np.asarray(durations)[i]), curves.shape[1])
+        x = (
+            x_pct
+            if durations is None
+            else np.linspace(0, float(np.asarray(durations)[i]), curves.shape[1])
+        )
         for j in range(4):
             ax.plot(x, np.degrees(curves[i, :, j]), color=_COLORS[j], lw=1.2)
         ax.set_title(titles[i], fontsize=8)
@@ -212,8 +223,12 @@ def plot_primitives(
     titles = [f"#{i}: {counts[i]} seg., {durations[i]:.2f} s" for i in range(k)]
     ncols = 6 if k > 12 else min(k, 4)
     return _curves_grid(
-        path, primitive_curves, titles,
-        f"The {k} primitives (cluster centres reconstructed; x: % of the segment)", "deg", ncols,
+        path,
+        primitive_curves,
+        titles,
+        f"The {k} primitives (cluster centres reconstructed; x: % of the segment)",
+        "deg",
+        ncols,
     )
 
 

@@ -71,9 +71,13 @@ def table(t: ErrorTable, links: Sequence[tuple[str, str]] = ()) -> str:
     notes = "".join(f'<p class="note">{html.escape(n)}</p>' for n in t.notes)
     link = ""
     if links:
-        link = '<p class="note">' + " · ".join(
-            f'<a href="{html.escape(h)}">{html.escape(label)}</a>' for label, h in links
-        ) + "</p>"
+        link = (
+            '<p class="note">'
+            + " · ".join(
+                f'<a href="{html.escape(h)}">{html.escape(label)}</a>' for label, h in links
+            )
+            + "</p>"
+        )
     return (
         f"<table><caption>{html.escape(t.title)}</caption><tr>{head}</tr>{rows}</table>"
         f"{notes}{link}"

@@ -22,9 +22,11 @@ from visprim.segment.scores import (
     boundary_scores,
     corpus_boundary_scores,
     segment_boundaries,
+    truth_pause_halfwidths,
 )
 from visprim.segment.seg1 import DEFAULT_WINDOW, Seg1Events, seg1, seg1_events
 from visprim.segment.seg2 import (
+    DEFAULT_MIN_TRAVEL_DEG,
     Seg2Trace,
     seg2,
     seg2_trace,
@@ -42,6 +44,7 @@ from visprim.segment.zvc import (
 
 __all__ = [
     "DEFAULT_MIN_CHANGE_DEG",
+    "DEFAULT_MIN_TRAVEL_DEG",
     "DEFAULT_WINDOW",
     "BoundaryScores",
     "CorpusCrossings",
@@ -61,6 +64,7 @@ __all__ = [
     "segment_concatenated",
     "segment_corpus",
     "speed_squared",
+    "truth_pause_halfwidths",
     "tune_seg2_threshold",
     "velocity_concatenated",
     "zvc",

@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike, NDArray
 from visprim.segment.clock import times_to_frames
 from visprim.segment.seg1 import DEFAULT_WINDOW, seg1_from_crossings
 from visprim.segment.seg2 import (
-    _segments_from_boundaries,
+    DEFAULT_MIN_TRAVEL_DEG,
     seg2_boundaries,
     tune_seg2_threshold_concatenated,
 )
@@ -96,6 +96,7 @@ def segment_concatenated(
     repetitions: ArrayLike | int = 1,
     threshold: float | None = None,
     coverage: float = 1.0,
+    min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
     window: float = DEFAULT_WINDOW,
     min_change_deg: float = DEFAULT_MIN_CHANGE_DEG,
     min_dofs: int = 2,
@@ -112,6 +113,8 @@ def segment_concatenated(
     threshold : float, optional
         SEG-2 only: c in (rad/s)²; default: tuned on this corpus
         (:func:`~visprim.segment.tune_seg2_threshold`, with ``coverage``).
+    min_travel_deg : float, degrees
+        SEG-2 only: travel that makes a run of ``z ≥ c`` a movement (:mod:`.seg2`).
     window, min_change_deg, min_dofs
         SEG-1 only: see :func:`~visprim.segment.seg1`.
     """
@@ -132,13 +135,22 @@ def segment_concatenated(
     if method == "seg1":
         crossings = zvc_concatenated(t, a, off, min_change_deg=min_change_deg, velocity=v)
         trial, start, end = seg1_from_crossings(crossings, window=window, min_dofs=min_dofs)
+        start_frame = times_to_frames(t, off, trial, start)
+        end_frame = times_to_frames(t, off, trial, end)
     elif method == "seg2":
         z = np.einsum("ij,ij->i", v, v)
         if threshold is None:
-            c = tune_seg2_threshold_concatenated(z, off, repetitions, coverage=coverage)
+            c = tune_seg2_threshold_concatenated(
+                t, z, off, repetitions, min_travel_deg=min_travel_deg, coverage=coverage
+            )
         else:
             c = float(threshold)
-        trial, start, end = _segments_from_boundaries(*seg2_boundaries(t, z, off, c))
+        b_trial, b_frame, b_time = seg2_boundaries(t, z, off, c, min_travel_deg=min_travel_deg)
+        same = b_trial[1:] == b_trial[:-1]
+        trial = b_trial[:-1][same]
+        start, end = b_time[:-1][same], b_time[1:][same]
+        start_frame = b_frame[:-1][same].astype(np.float64)
+        end_frame = b_frame[1:][same].astype(np.float64)
     else:
         raise ValueError(f"method must be 'seg1' or 'seg2', got {method!r}")
     return CorpusSegmentation(
@@ -146,8 +158,8 @@ def segment_concatenated(
         trial=trial,
         start=start,
         end=end,
-        start_frame=times_to_frames(t, off, trial, start),
-        end_frame=times_to_frames(t, off, trial, end),
+        start_frame=start_frame,
+        end_frame=end_frame,
         offsets=off,
         n_frames=int(a.shape[0]),
         threshold=c,
@@ -163,6 +175,7 @@ def segment_corpus(
     repetitions: Sequence[int] | int = 1,
     threshold: float | None = None,
     coverage: float = 1.0,
+    min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
     window: float = DEFAULT_WINDOW,
     min_change_deg: float = DEFAULT_MIN_CHANGE_DEG,
     min_dofs: int = 2,
@@ -181,6 +194,7 @@ def segment_corpus(
         repetitions=np.asarray(repetitions, dtype=np.int64),
         threshold=threshold,
         coverage=coverage,
+        min_travel_deg=min_travel_deg,
         window=window,
         min_change_deg=min_change_deg,
         min_dofs=min_dofs,

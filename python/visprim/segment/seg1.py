@@ -5,7 +5,8 @@ Algorithm (per trial, vectorised over a corpus):
 1. Find the significant ZVCs of every DOF (:mod:`visprim.segment.zvc`).
 2. Merge the ZVCs of all DOFs, in time order, into *events*: a ZVC closer than ``window``
    seconds (default 0.3 s = 300 ms) to the previous ZVC joins that ZVC's event (single
-   linkage along time). An event's time is the mean time of its ZVCs.
+   linkage along time). An event's time is the **median** time of its ZVCs (robust to the
+   late or early crossing of a DOF that stops slowly and jitters around zero velocity).
 3. An event is a *snip* when ZVCs of at least ``min_dofs`` (default 2, "more than one")
    distinct DOFs fall in it; otherwise it is a lone ZVC.
 4. The movement is cut at every event; a segment between two consecutive events is kept
@@ -36,7 +37,7 @@ class Seg1Events(NamedTuple):
     """Events of a corpus, sorted by trial then time."""
 
     trial: NDArray[np.int64]  #: (m,) trial index
-    time: NDArray[np.float64]  #: (m,) seconds, mean time of the event's ZVCs
+    time: NDArray[np.float64]  #: (m,) seconds, median time of the event's ZVCs
     n_dofs: NDArray[np.int64]  #: (m,) number of distinct DOFs with a ZVC in the event
     is_snip: NDArray[np.bool_]  #: (m,) n_dofs >= min_dofs
 
@@ -61,11 +62,12 @@ def seg1_events(
     event = np.cumsum(new) - 1
     m = int(event[-1]) + 1
     counts = np.bincount(event, minlength=m)
-    mean_time = np.bincount(event, weights=time, minlength=m) / counts
+    first = np.flatnonzero(new)  # ZVCs of an event are contiguous and in time order
+    median_time = 0.5 * (time[first + (counts - 1) // 2] + time[first + counts // 2])
     n_dof = int(dof.max()) + 1
     pairs = np.unique(event * n_dof + dof)
     n_dofs = np.bincount(pairs // n_dof, minlength=m).astype(np.int64)
-    return Seg1Events(trial[new], mean_time, n_dofs, n_dofs >= int(min_dofs))
+    return Seg1Events(trial[new], median_time, n_dofs, n_dofs >= int(min_dofs))
 
 
 def seg1_from_crossings(

@@ -1,34 +1,47 @@
 """SEG-2: segmentation where the summed squared angular velocity drops below a threshold.
 
-``z(t) = Σᵢ θ̇ᵢ(t)²`` in (rad/s)², velocities from the real timestamps. Frames with
-``z < c`` are *rest*. Per trial (vectorised over a corpus):
+``z(t) = Σᵢ θ̇ᵢ(t)²`` in (rad/s)², velocities from the real timestamps. Per trial
+(vectorised over a corpus), for a threshold ``c``:
 
-* a rest run that touches neither end of the trial yields one boundary, at the frame where
-  ``z`` is smallest in the run (the instant the arm is closest to standing still);
-* a rest run at the start of the trial yields the movement's onset: the time where ``z``
-  rises through ``c`` (linear interpolation between frames); one at the end yields the
-  offset where ``z`` falls through ``c``. A trial that starts (ends) above ``c`` gets a
-  boundary at its first (last) frame;
-* consecutive boundaries delimit the segments, so SEG-2 **partitions** the movement from
-  onset to offset; a trial that never exceeds ``c`` has no segment.
+1. **Movement runs** are the maximal runs of frames with ``z ≥ c``. A run is *significant*
+   when the arm travels more than ``min_travel_deg`` (default 5°) during it, travel being
+   the joint-space path length ``∫ √z dt`` (radians, trapezoid rule). Insignificant runs —
+   sensor jitter at rest, the filter's transients at a trial's ends — count as rest.
+2. **Boundaries:**
 
-With ``n_dips(c)`` interior rest runs a trial has ``n_dips(c) + 1`` segments.
+   * between two consecutive significant runs: the frame where ``z`` is smallest in the
+     rest between them (the instant the arm is closest to standing still);
+   * before the first significant run: the movement's *onset*, found by walking back from
+     the run's first frame down the slope of ``z`` to its last local minimum (the instant
+     the speed starts rising, or the last frame where ``z ≤ 10⁻⁶ c``; this removes the delay
+     of the crossing of ``c``, which grows with ``c``);
+   * after the last significant run: the *offset*, symmetrically (first local minimum of
+     ``z`` after the run).
+
+3. Consecutive boundaries delimit the segments, so SEG-2 **partitions** the movement from
+   onset to offset; with ``n`` significant runs a trial has ``n`` segments (none if it never
+   moves significantly).
 
 Threshold tuning (:func:`tune_seg2_threshold`)
 ----------------------------------------------
-The paper chooses ``c`` so that every movement yields at least as many segments as its
-number of repetitions. One global ``c`` serves the whole corpus:
+The paper chooses ``c`` so that every movement yields at least as many segments as its number
+of repetitions; one global ``c`` serves the whole corpus:
 
-1. Candidate thresholds: ``n_grid`` values spaced geometrically between the 1st percentile
-   and the maximum of ``z`` over the corpus.
-2. For every trial and candidate, the number of segments is counted exactly (vectorised:
-   each frame adds one rest run on the interval of ``c`` where it starts one).
-3. The feasible candidates are those for which every trial reaches its repetitions
-   (``n_segments ≥ repetitions``); with ``coverage < 1`` a fraction ``1 − coverage`` of
-   the trials may miss. If none is feasible, the candidate with most satisfied trials wins.
-4. Among the feasible candidates, the chosen ``c`` is the one that segments the corpus the
-   most consistently: the one maximising the total number of segments, i.e. separating the
-   most rests; ties go to the *smallest* such c (the most conservative one).
+1. Candidates: ``n_grid`` (64) values spaced geometrically from the 1st percentile to the
+   maximum of ``z`` over the corpus.
+2. For every trial and candidate, the number of segments (significant runs) is counted.
+3. *Feasible* candidates give every trial at least its repetitions (with ``coverage < 1``,
+   at least that fraction of the trials; if no candidate is feasible, those satisfying the
+   most trials are).
+4. The repetitions alone do not pin ``c`` down (with one repetition per trial any ``c`` that
+   keeps the movement is feasible), so the count must also have reached its *plateau*: the
+   corpus' total number of segments must be at least ``plateau`` (0.98) times its largest
+   value over all candidates. The chosen ``c`` is the **smallest** candidate that is both
+   feasible and on the plateau: the lowest threshold that separates the rests between
+   strokes (and repetitions) of the whole corpus.
+
+A corpus of more than ``max_trials`` (2000) trials is tuned on ``max_trials`` trials spread
+evenly over it (deterministic), which keeps the tuning cost bounded.
 """
 
 from __future__ import annotations
@@ -42,6 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 from visprim.segment.velocity import velocity_concatenated
 
 __all__ = [
+    "DEFAULT_MIN_TRAVEL_DEG",
     "Seg2Trace",
     "seg2",
     "seg2_boundaries",
@@ -52,6 +66,15 @@ __all__ = [
     "tune_seg2_threshold",
     "tune_seg2_threshold_concatenated",
 ]
+
+#: A movement run counts as a movement (not jitter) when the arm travels more than this in
+#: joint space during it, degrees.
+DEFAULT_MIN_TRAVEL_DEG: float = 5.0
+_PLATEAU = 0.98
+_N_GRID = 64
+_MAX_TRIALS = 2000
+#: z below this fraction of c counts as standing still when walking to an onset / offset.
+_STILL = 1e-6
 
 
 def speed_squared_concatenated(
@@ -71,154 +94,227 @@ def speed_squared(times: ArrayLike, angles: ArrayLike) -> NDArray[np.float64]:
     return speed_squared_concatenated(times, a, np.zeros(1, dtype=np.int64))
 
 
-def _layout(n: int, offsets: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    lengths = np.diff(np.append(offsets, n))
-    return np.repeat(np.arange(offsets.size), lengths), np.append(offsets[1:], n) - 1
+@dataclass(frozen=True)
+class _Corpus:
+    """Frame layout of a concatenated corpus and the running joint-space travel."""
+
+    t: NDArray[np.float64]
+    z: NDArray[np.float64]
+    offsets: NDArray[np.int64]
+    trial_of: NDArray[np.int64]
+    first: NDArray[np.bool_]
+    last: NDArray[np.bool_]
+    travel: NDArray[np.float64]  # travel[i] = path length (rad) from the trial's start to i
+
+    @classmethod
+    def build(cls, times: ArrayLike, z: ArrayLike, offsets: ArrayLike) -> _Corpus:
+        t = np.ascontiguousarray(times, dtype=np.float64)
+        zz = np.ascontiguousarray(z, dtype=np.float64)
+        off = np.ascontiguousarray(offsets, dtype=np.int64)
+        n = zz.size
+        if t.shape != (n,):
+            raise ValueError(f"times {t.shape} and z {zz.shape} must have the same length")
+        if off.ndim != 1 or off.size == 0 or off[0] != 0 or np.any(np.diff(off) <= 0):
+            raise ValueError("offsets must be a non-empty increasing 1-D array starting at 0")
+        if off[-1] >= n:
+            raise ValueError(f"offsets must be < the number of frames ({n})")
+        if not np.all(np.isfinite(zz)) or np.any(zz < 0):
+            raise ValueError("z must be finite and >= 0")
+        lengths = np.diff(np.append(off, n))
+        trial_of = np.repeat(np.arange(off.size), lengths)
+        first = np.zeros(n, dtype=bool)
+        first[off] = True
+        last = np.zeros(n, dtype=bool)
+        last[off + lengths - 1] = True
+        speed = np.sqrt(zz)
+        step = 0.5 * (speed[1:] + speed[:-1]) * np.diff(t)
+        step[last[:-1]] = 0.0  # no travel across the join of two trials
+        travel = np.concatenate([[0.0], np.cumsum(step)])
+        return cls(t, zz, off, trial_of, first, last, travel)
+
+    def significant_runs(
+        self, c: float, min_travel: float
+    ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """First and last frame of every significant run of ``z ≥ c``, in corpus order."""
+        above = self.z >= c
+        prev = np.concatenate([[False], above[:-1]]) & ~self.first
+        nxt = np.concatenate([above[1:], [False]]) & ~self.last
+        start = np.flatnonzero(above & ~prev)
+        end = np.flatnonzero(above & ~nxt)
+        keep = self.travel[end] - self.travel[start] > min_travel
+        return start[keep], end[keep]
+
+
+def _boundaries(
+    corpus: _Corpus, c: float, min_travel: float
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """(trial, frame) of every SEG-2 boundary, sorted by trial and frame."""
+    z, n = corpus.z, corpus.z.size
+    s, e = corpus.significant_runs(c, min_travel)
+    if s.size == 0:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty
+    tr = corpus.trial_of[s]
+    first_run = np.concatenate([[True], tr[1:] != tr[:-1]])
+    last_run = np.concatenate([tr[1:] != tr[:-1], [True]])
+    idx = np.arange(n)
+    still = z <= _STILL * c  # numerically at rest (exact data): stop walking there
+    # Onset: last local minimum of z at or before the run's start (a "stop" frame is a
+    # trial's first frame, one not above its predecessor, or one at rest).
+    stop_back = corpus.first | still
+    stop_back[1:] |= z[:-1] >= z[1:]
+    last_stop = np.maximum.accumulate(np.where(stop_back, idx, 0))
+    onset = last_stop[s[first_run]]
+    # Offset: first local minimum of z at or after the run's end.
+    stop_fwd = corpus.last | still
+    stop_fwd[:-1] |= z[1:] >= z[:-1]
+    next_stop = np.minimum.accumulate(np.where(stop_fwd, idx, n)[::-1])[::-1]
+    offset = next_stop[e[last_run]]
+    # Between consecutive significant runs of a trial: argmin of z over the rest between.
+    between = ~last_run[:-1]
+    gap_start = e[:-1][between] + 1
+    gap_stop = s[1:][between]  # exclusive
+    if gap_start.size:
+        mark = np.zeros(n + 1, dtype=np.int64)
+        np.add.at(mark, gap_start, 1)
+        np.add.at(mark, gap_stop, -1)
+        frames = np.flatnonzero(np.cumsum(mark[:-1]) > 0)
+        gap = np.searchsorted(gap_start, frames, side="right") - 1
+        order = np.lexsort((z[frames], gap))
+        head = np.concatenate([[True], gap[order][1:] != gap[order][:-1]])
+        inner = frames[order][head]
+    else:
+        inner = np.zeros(0, dtype=np.int64)
+    frame = np.concatenate([onset, inner, offset])
+    trial = corpus.trial_of[frame]
+    order = np.lexsort((frame, trial))
+    return trial[order], frame[order]
 
 
 def seg2_boundaries(
-    times: ArrayLike, z: ArrayLike, offsets: ArrayLike, threshold: float
-) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-    """SEG-2 boundaries of a concatenated corpus: ``(trial, time s)`` sorted by trial and
-    time (rules in the module docstring). ``z`` in (rad/s)², ``threshold`` ``c`` likewise."""
-    t = np.asarray(times, dtype=np.float64)
-    zz = np.asarray(z, dtype=np.float64)
-    off = np.asarray(offsets, dtype=np.int64)
-    c = float(threshold)
-    if not (np.isfinite(c) and c > 0):
-        raise ValueError(f"threshold must be a positive number in (rad/s)^2, got {threshold!r}")
-    n = zz.size
-    trial_of, last = _layout(n, off)
-    first_mask = np.zeros(n, dtype=bool)
-    first_mask[off] = True
-    last_mask = np.zeros(n, dtype=bool)
-    last_mask[last] = True
-
-    below = zz < c
-    prev_below = np.concatenate([[False], below[:-1]]) & ~first_mask
-    next_below = np.concatenate([below[1:], [False]]) & ~last_mask
-    run_start = np.flatnonzero(below & ~prev_below)
-    run_end = np.flatnonzero(below & ~next_below)
-    lead = first_mask[run_start] & ~last_mask[run_end]
-    trail = last_mask[run_end] & ~first_mask[run_start]
-    inner = ~first_mask[run_start] & ~last_mask[run_end]
-
-    # Interior runs: frame of minimal z in the run.
-    run_id = np.cumsum(below & ~prev_below) - 1
-    idx = np.flatnonzero(below)
-    rid = run_id[idx]
-    order = np.lexsort((zz[idx], rid))
-    is_first = np.ones(order.size, dtype=bool)
-    is_first[1:] = rid[order][1:] != rid[order][:-1]
-    argmin = idx[order][is_first]  # one per run, in run order
-    b_inner = t[argmin[inner]]
-
-    # Onset after a leading run: z rises through c between frames e and e + 1.
-    e = run_end[lead]
-    b_lead = t[e] + (c - zz[e]) / (zz[e + 1] - zz[e]) * (t[e + 1] - t[e])
-    # Offset before a trailing run: z falls through c between frames s - 1 and s.
-    s = run_start[trail]
-    b_trail = t[s - 1] + (zz[s - 1] - c) / (zz[s - 1] - zz[s]) * (t[s] - t[s - 1])
-    # Trials that start / end above c.
-    b_first = off[~below[off]]
-    b_last = last[~below[last]]
-
-    trial = np.concatenate(
-        [
-            trial_of[argmin[inner]],
-            trial_of[e],
-            trial_of[s],
-            trial_of[b_first],
-            trial_of[b_last],
-        ]
-    )
-    time = np.concatenate([b_inner, b_lead, b_trail, t[b_first], t[b_last]])
-    order = np.lexsort((time, trial))
-    return trial[order], time[order]
-
-
-def _segments_from_boundaries(
-    trial: NDArray[np.int64], time: NDArray[np.float64]
-) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
-    same = trial[1:] == trial[:-1]
-    return trial[:-1][same], time[:-1][same], time[1:][same]
-
-
-def seg2_segment_counts(
-    z: ArrayLike, offsets: ArrayLike, grid: ArrayLike
-) -> NDArray[np.int64]:
-    """Exact number of SEG-2 segments of every trial at every candidate threshold.
+    times: ArrayLike,
+    z: ArrayLike,
+    offsets: ArrayLike,
+    threshold: float,
+    *,
+    min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
+    """SEG-2 boundaries of a concatenated corpus (rules in the module docstring).
 
     Parameters
     ----------
-    z : (N,) (rad/s)², concatenated; offsets : (n_trials,) first frames;
-    grid : (K,) ascending candidate thresholds, (rad/s)².
+    times : (N,) seconds; z : (N,) (rad/s)²; offsets : (n_trials,) first frames.
+    threshold : float, c in (rad/s)².
+    min_travel_deg : float, degrees.
+
+    Returns
+    -------
+    ``(trial, frame, time)``: trial index, frame index within the trial and time in seconds of
+    every boundary, sorted by trial then time. A trial with ``n`` segments has ``n + 1``
+    boundaries (none without a segment).
+    """
+    c = float(threshold)
+    if not (np.isfinite(c) and c > 0):
+        raise ValueError(f"threshold must be a positive number in (rad/s)^2, got {threshold!r}")
+    corpus = _Corpus.build(times, z, offsets)
+    trial, frame = _boundaries(corpus, c, _min_travel(min_travel_deg))
+    return trial, frame - corpus.offsets[trial], corpus.t[frame]
+
+
+def _min_travel(min_travel_deg: float) -> float:
+    if not (np.isfinite(min_travel_deg) and min_travel_deg >= 0):
+        raise ValueError(f"min_travel_deg must be a number of degrees >= 0, got {min_travel_deg!r}")
+    return float(np.deg2rad(min_travel_deg))
+
+
+def _segment_counts(corpus: _Corpus, grid: NDArray[np.float64], min_travel: float):
+    m = corpus.offsets.size
+    counts = np.empty((m, grid.size), dtype=np.int64)
+    for k, c in enumerate(grid):
+        s, _ = corpus.significant_runs(float(c), min_travel)
+        counts[:, k] = np.bincount(corpus.trial_of[s], minlength=m)
+    return counts
+
+
+def seg2_segment_counts(
+    times: ArrayLike,
+    z: ArrayLike,
+    offsets: ArrayLike,
+    grid: ArrayLike,
+    *,
+    min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
+) -> NDArray[np.int64]:
+    """Number of SEG-2 segments of every trial at every candidate threshold.
+
+    Parameters
+    ----------
+    times : (N,) seconds; z : (N,) (rad/s)², concatenated; offsets : (n_trials,) first frames;
+    grid : (K,) candidate thresholds, (rad/s)².
 
     Returns
     -------
     (n_trials, K) int64.
     """
-    zz = np.asarray(z, dtype=np.float64)
-    off = np.asarray(offsets, dtype=np.int64)
     g = np.asarray(grid, dtype=np.float64)
-    if g.ndim != 1 or g.size == 0 or np.any(np.diff(g) <= 0):
-        raise ValueError("grid must be a non-empty strictly increasing 1-D array")
-    n, m, k = zz.size, off.size, g.size
-    trial_of, last = _layout(n, off)
-    not_first = np.ones(n, dtype=bool)
-    not_first[off] = False
-    j = np.flatnonzero(not_first)
-    # A rest run starts at frame j >= 1 exactly when z[j] < c <= z[j-1].
-    lo = np.searchsorted(g, zz[j], side="right")
-    hi = np.searchsorted(g, zz[j - 1], side="right")
-    ok = lo < hi
-    width = k + 1
-    starts = np.bincount(trial_of[j][ok] * width + lo[ok], minlength=m * width)
-    stops = np.bincount(trial_of[j][ok] * width + hi[ok], minlength=m * width)
-    runs = np.cumsum((starts - stops).reshape(m, width), axis=1)[:, :k]
-    cols = np.arange(k)[None, :]
-    last_below = cols >= np.searchsorted(g, zz[last], side="right")[:, None]
-    zmax = np.maximum.reduceat(zz, off)
-    all_below = cols >= np.searchsorted(g, zmax, side="right")[:, None]
-    inner = runs - last_below + all_below
-    return np.where(all_below, 0, inner + 1).astype(np.int64)
+    if g.ndim != 1 or g.size == 0 or not np.all(g > 0):
+        raise ValueError("grid must be a non-empty 1-D array of positive thresholds")
+    return _segment_counts(_Corpus.build(times, z, offsets), g, _min_travel(min_travel_deg))
+
+
+def _subset(
+    offsets: NDArray[np.int64], n: int, keep: NDArray[np.int64]
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Frame rows and new offsets of the trials ``keep`` of a concatenation."""
+    lengths = np.diff(np.append(offsets, n))[keep]
+    new_off = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+    rows = np.repeat(offsets[keep] - new_off, lengths) + np.arange(lengths.sum())
+    return rows, new_off
 
 
 def tune_seg2_threshold_concatenated(
+    times: ArrayLike,
     z: ArrayLike,
     offsets: ArrayLike,
     repetitions: ArrayLike | int = 1,
     *,
+    min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
     coverage: float = 1.0,
-    n_grid: int = 400,
+    plateau: float = _PLATEAU,
+    n_grid: int = _N_GRID,
+    max_trials: int = _MAX_TRIALS,
 ) -> float:
     """Global SEG-2 threshold ``c`` ((rad/s)²) of a concatenated corpus (rules in the module
-    docstring). ``repetitions``: one int per trial (or one for all)."""
-    zz = np.asarray(z, dtype=np.float64)
-    off = np.asarray(offsets, dtype=np.int64)
+    docstring). ``repetitions``: one int per trial, or one for all."""
+    off = np.ascontiguousarray(offsets, dtype=np.int64)
     reps = np.broadcast_to(np.asarray(repetitions, dtype=np.int64), off.shape)
     if np.any(reps < 1):
         raise ValueError("repetitions must be >= 1 for every trial")
     if not (0 < coverage <= 1):
         raise ValueError(f"coverage must be in (0, 1], got {coverage!r}")
-    if int(n_grid) < 2:
-        raise ValueError(f"n_grid must be >= 2, got {n_grid!r}")
-    if zz.size == 0 or not np.all(np.isfinite(zz)):
-        raise ValueError("z must be non-empty and finite")
+    if not (0 < plateau <= 1):
+        raise ValueError(f"plateau must be in (0, 1], got {plateau!r}")
+    if int(n_grid) < 2 or int(max_trials) < 1:
+        raise ValueError(f"n_grid must be >= 2 and max_trials >= 1, got {n_grid}, {max_trials}")
+    t = np.ascontiguousarray(times, dtype=np.float64)
+    zz = np.ascontiguousarray(z, dtype=np.float64)
+    if off.size > max_trials:
+        keep = np.unique(np.linspace(0, off.size - 1, int(max_trials)).round().astype(np.int64))
+        rows, off = _subset(off, zz.size, keep)
+        t, zz, reps = t[rows], zz[rows], reps[keep]
+    corpus = _Corpus.build(t, zz, off)
     top = float(zz.max())
-    low = float(np.quantile(zz, 0.01))
-    low = max(low, top * 1e-12)
     if not top > 0:
         raise ValueError("the corpus never moves (z is 0 everywhere); no threshold exists")
+    low = max(float(np.quantile(zz, 0.01)), top * 1e-9)
     grid = np.geomspace(low, top, int(n_grid))
-    counts = seg2_segment_counts(zz, off, grid)
+    counts = _segment_counts(corpus, grid, _min_travel(min_travel_deg))
     satisfied = (counts >= reps[:, None]).sum(axis=0)
-    need = int(np.ceil(coverage * off.size - 1e-9))
-    feasible = satisfied >= need
+    feasible = satisfied >= int(np.ceil(coverage * off.size - 1e-9))
     if not np.any(feasible):
         feasible = satisfied == satisfied.max()
-    total = np.where(feasible, counts.sum(axis=0), -1)
-    return float(grid[int(np.argmax(total))])
+    total = counts.sum(axis=0)
+    ok = feasible & (total >= plateau * total[feasible].max())
+    return float(grid[int(np.argmax(ok))])
 
 
 def tune_seg2_threshold(
@@ -226,22 +322,35 @@ def tune_seg2_threshold(
     angles_list: Sequence[ArrayLike],
     repetitions: Sequence[int] | int = 1,
     *,
+    min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
     coverage: float = 1.0,
-    n_grid: int = 400,
+    plateau: float = _PLATEAU,
+    n_grid: int = _N_GRID,
+    max_trials: int = _MAX_TRIALS,
 ) -> float:
-    """One SEG-2 threshold ``c`` ((rad/s)²) for a whole corpus of trials (times in seconds,
-    angles (T_i, C) radians, normally low-passed); see the module docstring."""
+    """One SEG-2 threshold ``c`` ((rad/s)²) for a whole corpus of trials (times (T_i,)
+    seconds, angles (T_i, C) radians, normally low-passed); rules in the module docstring.
+
+    ``repetitions``: per trial (e.g. ``[t.repetitions for t in trials]``) or one for all.
+    """
     if len(times_list) != len(angles_list) or len(times_list) == 0:
         raise ValueError("times_list and angles_list must be non-empty and of equal length")
     lengths = np.array([np.shape(a)[0] for a in angles_list], dtype=np.int64)
-    offsets = np.concatenate([[0], np.cumsum(lengths)[:-1]])
+    offsets = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+    t = np.concatenate([np.asarray(x, dtype=np.float64) for x in times_list])
     z = speed_squared_concatenated(
-        np.concatenate([np.asarray(t, dtype=np.float64) for t in times_list]),
-        np.concatenate([np.asarray(a, dtype=np.float64) for a in angles_list]),
-        offsets,
+        t, np.concatenate([np.asarray(a, dtype=np.float64) for a in angles_list]), offsets
     )
     return tune_seg2_threshold_concatenated(
-        z, offsets, repetitions, coverage=coverage, n_grid=n_grid
+        t,
+        z,
+        offsets,
+        np.asarray(repetitions, dtype=np.int64),
+        min_travel_deg=min_travel_deg,
+        coverage=coverage,
+        plateau=plateau,
+        n_grid=n_grid,
+        max_trials=max_trials,
     )
 
 
@@ -252,7 +361,8 @@ class Seg2Trace:
     times: NDArray[np.float64]  #: (T,) seconds
     z: NDArray[np.float64]  #: (T,) Σ θ̇ᵢ², (rad/s)²
     threshold: float  #: c, (rad/s)²
-    boundaries: NDArray[np.float64]  #: (n + 1,) seconds (empty if no segment)
+    boundaries: NDArray[np.float64]  #: (n + 1,) seconds (empty without a segment)
+    boundary_frames: NDArray[np.int64]  #: (n + 1,) frame indices of the boundaries
     segments: NDArray[np.float64]  #: (n, 2) [start, end] seconds
 
 
@@ -262,7 +372,7 @@ def seg2_trace(
     repetitions: int = 1,
     threshold: float | None = None,
     *,
-    n_grid: int = 400,
+    min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
 ) -> Seg2Trace:
     """:func:`seg2` with its intermediate results (z(t), c, boundaries)."""
     t = np.asarray(times, dtype=np.float64)
@@ -272,12 +382,14 @@ def seg2_trace(
     off = np.zeros(1, dtype=np.int64)
     z = speed_squared_concatenated(t, a, off)
     if threshold is None:
-        c = tune_seg2_threshold_concatenated(z, off, int(repetitions), n_grid=n_grid)
+        c = tune_seg2_threshold_concatenated(
+            t, z, off, int(repetitions), min_travel_deg=min_travel_deg
+        )
     else:
         c = float(threshold)
-    _, b = seg2_boundaries(t, z, off, c)
+    _, frames, b = seg2_boundaries(t, z, off, c, min_travel_deg=min_travel_deg)
     segs = np.stack([b[:-1], b[1:]], axis=1) if b.size >= 2 else np.zeros((0, 2))
-    return Seg2Trace(t, z, c, b, segs)
+    return Seg2Trace(t, z, c, b, frames, segs)
 
 
 def seg2(
@@ -286,7 +398,7 @@ def seg2(
     repetitions: int = 1,
     threshold: float | None = None,
     *,
-    n_grid: int = 400,
+    min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
 ) -> NDArray[np.float64]:
     """SEG-2 segments of one trial.
 
@@ -297,15 +409,17 @@ def seg2(
     angles : (T, C) radians
         Joint angles, normally low-passed first (:mod:`visprim.filtering`).
     repetitions : int
-        Repetitions of the movement; used only when ``threshold`` is None.
+        Repetitions of the movement; used only to tune ``threshold`` when it is None.
     threshold : float, optional
-        ``c`` in (rad/s)². Default: tuned on this trial alone with
-        :func:`tune_seg2_threshold` (for a corpus, tune one ``c`` on all trials and pass it,
-        or use :func:`visprim.segment.segment_corpus`).
+        ``c`` in (rad/s)². Default: tuned on this trial alone (:func:`tune_seg2_threshold`).
+        For a corpus, tune one ``c`` on all trials and pass it, or use
+        :func:`visprim.segment.segment_corpus`.
+    min_travel_deg : float, degrees
+        Joint-space travel that makes a run of ``z ≥ c`` a movement (default 5°).
 
     Returns
     -------
     (n, 2) float64 array of consecutive [start, end] times in seconds (a partition of the
     movement from onset to offset).
     """
-    return seg2_trace(times, angles, repetitions, threshold, n_grid=n_grid).segments
+    return seg2_trace(times, angles, repetitions, threshold, min_travel_deg=min_travel_deg).segments

@@ -65,12 +65,17 @@ def velocity_concatenated(
         raise ValueError("velocity_concatenated: times must be strictly increasing in a trial")
     v = np.empty_like(x)
     if n > 2:
-        h0 = h[:-1, None]  # t[i] - t[i-1]
-        h1 = h[1:, None]  # t[i+1] - t[i]
+        # np.gradient's second-order weights for uneven steps (the steps that straddle a join
+        # of two trials give garbage rows, overwritten by the one-sided ends below).
+        h0 = h[:-1]  # t[i] - t[i-1]
+        h1 = h[1:]  # t[i+1] - t[i]
         with np.errstate(divide="ignore", invalid="ignore"):
-            v[1:-1] = (
-                h0**2 * x[2:] - h1**2 * x[:-2] + (h1**2 - h0**2) * x[1:-1]
-            ) / (h0 * h1 * (h0 + h1))
+            w_prev = (-h1 / (h0 * (h0 + h1)))[:, None]
+            w_here = ((h1 - h0) / (h0 * h1))[:, None]
+            w_next = (h0 / (h1 * (h0 + h1)))[:, None]
+        np.multiply(w_prev, x[:-2], out=v[1:-1])
+        v[1:-1] += w_here * x[1:-1]
+        v[1:-1] += w_next * x[2:]
     v[off] = (x[off + 1] - x[off]) / h[off, None]
     v[ends] = (x[ends] - x[ends - 1]) / h[ends - 1, None]
     return v

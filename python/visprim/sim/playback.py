@@ -184,14 +184,19 @@ def hand_points(frames: NDArray[np.float64], hand_index: int) -> NDArray[np.floa
     return tf[:, :3, :3] @ np.asarray(HAND_POINT) + tf[:, :3, 3]
 
 
-def _forward_kinematics(
+def _hand_positions(
     skeleton: dart.dynamics.Skeleton, positions: NDArray[np.float64]
 ) -> NDArray[np.float64]:
+    """World position of the finger point for each row of joint positions (forward
+    kinematics; the skeleton's positions are restored afterwards)."""
     saved = skeleton.getPositions()
-    out = np.empty((positions.shape[0], skeleton.getNumBodyNodes(), 4, 4))
+    hand = skeleton.getBodyNode("r_hand")
+    point = np.asarray(HAND_POINT)
+    out = np.empty((positions.shape[0], 3))
     for i, q in enumerate(positions):
         skeleton.setPositions(q)
-        out[i] = body_transforms(skeleton)
+        tf = hand.getWorldTransform()
+        out[i] = tf.rotation() @ point + tf.translation()
     skeleton.setPositions(saved)
     return out
 
@@ -263,8 +268,8 @@ def play(
     # Forward kinematics of the target (before the run; it moves the skeleton).
     ref_stride = max(1, int(round(0.01 / dt)))
     ref_steps = np.unique(np.append(np.arange(0, ref.times.shape[0], ref_stride), ref.via_steps))
-    hand_reference = hand_points(_forward_kinematics(skel, positions[ref_steps]), hand_index)
-    hand_via = hand_points(_forward_kinematics(skel, positions[ref.via_steps]), hand_index)
+    hand_reference = _hand_positions(skel, positions[ref_steps])
+    hand_via = _hand_positions(skel, positions[ref.via_steps])
 
     world.reset()
     skel.resetCommands()
@@ -274,8 +279,10 @@ def play(
 
     n_wait_max = int(math.ceil(timeout / dt)) + 2
     max_steps = ref.times.shape[0] + ref.via_steps.shape[0] * n_wait_max + 1
-    rec_q = np.empty((max_steps + 1, skel.getNumDofs()))
-    rec_k = np.empty(max_steps + 1, dtype=np.int64)
+    # Room for the trajectory plus some waiting; grown if the sequencer waits longer.
+    capacity = ref.times.shape[0] + 1000
+    rec_q = np.empty((capacity, skel.getNumDofs()))
+    rec_k = np.empty(capacity, dtype=np.int64)
     rec_q[0] = positions[0]
     rec_k[0] = 0
     frame_stride = max(1, int(round(1.0 / (render_fps * dt))))
@@ -304,6 +311,9 @@ def play(
         skel.setForces(tau)
         world.step()
         q = skel.getPositions()
+        if n_rec == rec_k.shape[0]:
+            rec_q = np.concatenate([rec_q, np.empty_like(rec_q)])
+            rec_k = np.concatenate([rec_k, np.empty_like(rec_k)])
         rec_q[n_rec] = q
         rec_k[n_rec] = k
         n_rec += 1
@@ -332,7 +342,7 @@ def play(
     rest = [i for i in range(len(joint_names)) if i not in arm]
     frames_arr = np.stack(frames)
     return Playback(
-        times=np.arange(n_rec) * dt,
+        times=np.arange(n_rec, dtype=np.float64) * dt,
         q_target=q_target,
         q_actual=q_actual,
         joint_errors_deg=np.degrees(errors),

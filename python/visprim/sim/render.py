@@ -20,7 +20,7 @@ from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.patches import Circle, Polygon
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from PIL import Image
 
 from visprim.sim.playback import Playback
@@ -86,7 +86,7 @@ class _Painter:
     def depth(self, point: NDArray[np.float64]) -> float:
         return float(np.asarray(point) @ self.back)
 
-    def shade(self, color: Sequence[float], normal: NDArray[np.float64]) -> NDArray[np.float64]:
+    def shade(self, color: ArrayLike, normal: NDArray[np.float64]) -> NDArray[np.float64]:
         brightness = 0.55 + 0.45 * max(0.0, float(normal @ self.light))
         return np.clip(np.asarray(color) * brightness, 0.0, 1.0)
 

@@ -104,6 +104,24 @@ def positions_to_angles(
     return np.stack([gamma, beta, alpha, q[:, el]], axis=1)
 
 
+def shoulder_angular_velocity(angles: ArrayLike, rates: ArrayLike) -> NDArray[np.float64]:
+    """Angular velocity (T, 3) rad/s of the upper arm relative to the torso, in the upper
+    arm's frame (the convention of DART's ball-joint velocities), from the Euler angles
+    (T, ≥3) rad and their time derivatives (T, ≥3) rad/s.
+
+    For ``R_S = Rz(γ) Ry(β) Rz(α)`` the body angular velocity in S is
+    ``γ̇ (−sin β cos α, sin β sin α, cos β) + β̇ (sin α, cos α, 0) + α̇ (0, 0, 1)``; the body
+    axes are S rotated by π about x (``BODY_TO_SHOULDER``), which flips y and z.
+    """
+    a = np.asarray(angles, dtype=np.float64)
+    r = np.asarray(rates, dtype=np.float64)
+    sb, cb = np.sin(a[:, 1]), np.cos(a[:, 1])
+    sa, ca = np.sin(a[:, 2]), np.cos(a[:, 2])
+    g, b, al = r[:, 0], r[:, 1], r[:, 2]
+    omega_s = np.stack([-g * sb * ca + b * sa, g * sb * sa + b * ca, g * cb + al], axis=1)
+    return omega_s * np.array([1.0, -1.0, -1.0])
+
+
 @dataclass(frozen=True)
 class Reference:
     """The target trajectory sampled on the control grid.
@@ -118,7 +136,7 @@ class Reference:
         Joint positions (ball joints: rotation vectors).
     velocities : (K + 1, n_dofs) array, rad/s
         Joint velocities (ball joints: angular velocity in the child frame, the convention of
-        DART's ball-joint velocities).
+        DART's ball-joint velocities; :func:`shoulder_angular_velocity`).
     via_steps : (n_via,) int array
         Grid indices of the via points, increasing; the last is K.
     duration : float
@@ -157,19 +175,14 @@ def build_reference(
     q = angles_to_positions(skeleton, a_grid)
     v = np.zeros_like(q)
     sh, el = arm_dof_indices(skeleton)
+    v[:, sh] = shoulder_angular_velocity(a_grid, spline(grid, 1))
     v[:, el] = spline(grid, 1)[:, 3]
-    # Angular velocity in the child frame by central differences of the rotation on the grid.
-    rot = Rotation.from_rotvec(q[:, sh])
-    step = (rot[:-1].inv() * rot[1:]).as_rotvec() / dt  # (K, 3), between samples
-    v[1:-1, sh] = 0.5 * (step[:-1] + step[1:])
-    v[0, sh] = step[0]
-    v[-1, sh] = step[-1]
     stride = max(1, int(round(via_spacing / dt)))
     via = np.arange(stride, n_steps, stride, dtype=np.int64)
     if via.size and n_steps - via[-1] < stride // 2:
         via = via[:-1]  # avoid a via point crowding the end point
     via = np.append(via, np.int64(n_steps))
-    return Reference(dt, np.arange(n_steps + 1) * dt, q, v, via, duration)
+    return Reference(dt, np.arange(n_steps + 1, dtype=np.float64) * dt, q, v, via, duration)
 
 
 @dataclass

@@ -1,0 +1,213 @@
+"""PrimitiveModel: scikit-learn conventions, fitted state, transform/predict/reconstruct."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from _pipeline_data import default_trials, fitted
+from sklearn.base import clone
+from sklearn.exceptions import NotFittedError
+from visprim import PrimitiveModel
+from visprim.vectors import to_curves
+
+DEFAULTS = {
+    "filter_order": 10,
+    "cutoff": 0.25,
+    "segmentation": "seg2",
+    "zvc_threshold_deg": 5.0,
+    "window": 0.3,
+    "seg2_threshold": None,
+    "n_samples": 100,
+    "n_components": 30,
+    "n_clusters": 30,
+    "n_init": 10,
+    "max_iter": 300,
+    "tol": 1e-4,
+    "seed": 0,
+}
+
+
+def test_parameters_follow_sklearn_conventions():
+    m = PrimitiveModel()
+    assert m.get_params() == DEFAULTS
+    m.set_params(n_clusters=12, segmentation="seg1")
+    assert m.n_clusters == 12 and m.segmentation == "seg1"
+    c = clone(m)
+    assert c.get_params() == m.get_params() and c is not m
+    # Constructor arguments are stored unchanged, even invalid ones (validated in fit).
+    assert PrimitiveModel(n_components=10_000).n_components == 10_000
+
+
+def test_not_fitted_errors():
+    m = PrimitiveModel()
+    x = np.zeros((2, 400))
+    for call in (
+        lambda: m.transform(x),
+        lambda: m.predict(x),
+        lambda: m.reconstruct(x),
+        lambda: m.primitive_angles(0),
+        lambda: m.error_table(),
+        lambda: m.n_primitives,
+        lambda: m.save("unused.npz"),
+    ):
+        with pytest.raises(NotFittedError):
+            call()
+
+
+@pytest.mark.parametrize(
+    ("params", "match"),
+    [
+        ({"segmentation": "seg3"}, "segmentation"),
+        ({"cutoff": 1.5}, "cutoff"),
+        ({"filter_order": 0}, "filter_order"),
+        ({"n_components": 401}, r"n_components.*400"),
+        ({"n_samples": 1}, "n_samples"),
+        ({"n_clusters": 0}, "n_clusters"),
+        ({"seg2_threshold": -1.0}, "seg2_threshold"),
+        ({"window": 0.0}, "window"),
+        ({"seed": -3}, "seed"),
+    ],
+)
+def test_bad_parameters_are_named_in_fit(params, match):
+    with pytest.raises(ValueError, match=match):
+        PrimitiveModel(**params).fit(list(default_trials()[:3]))
+
+
+def test_too_many_clusters_is_a_clear_error():
+    trials = list(default_trials()[:2])
+    with pytest.raises(ValueError, match=r"n_clusters=500 exceeds the number of segments"):
+        PrimitiveModel(n_clusters=500).fit(trials)
+
+
+def test_fit_rejects_non_trials():
+    with pytest.raises(TypeError, match="item 0"):
+        PrimitiveModel().fit([np.zeros((10, 4, 3))])
+    with pytest.raises(ValueError, match="at least one Trial"):
+        PrimitiveModel().fit([])
+
+
+def test_fitted_state_shapes():
+    m = fitted()
+    n = m.n_training_segments_
+    assert n > 500  # 220 trials of 2-6 strokes
+    assert m.mean_.shape == (400,)
+    assert m.eigenvalues_.shape == (400,)
+    assert m.eigenvectors_.shape == (400, 400)
+    assert m.components_.shape == (400, 30)
+    assert m.cluster_centers_.shape == (30, 30)
+    assert m.labels_.shape == (n,) and m.labels_.min() >= 0 and m.labels_.max() < 30
+    assert m.n_primitives == 30
+    assert m.seg2_threshold_ is not None and m.seg2_threshold_ > 0
+    assert np.all(m.segment_ends_ > m.segment_starts_)
+    assert len(m.trial_names_) == 220
+
+
+def test_pca_and_kmeans_state_agree_with_numpy_on_the_training_vectors():
+    m = fitted()
+    x = m.training_vectors_
+    mean = x.mean(axis=0)
+    cov = (x - mean).T @ (x - mean) / x.shape[0]
+    w = np.linalg.eigvalsh(cov)[::-1]
+    np.testing.assert_allclose(m.mean_, mean, atol=1e-12)
+    np.testing.assert_allclose(m.eigenvalues_[:60], w[:60], rtol=1e-8, atol=1e-12)
+    # transform is the projection on the first f eigenvectors.
+    p = m.transform(x)
+    np.testing.assert_allclose(p, (x - mean) @ m.eigenvectors_[:, :30], atol=1e-9)
+    # k-means: every training label is the nearest centre; inertia is the sum of distances.
+    d2 = ((p[:, None, :] - m.cluster_centers_[None]) ** 2).sum(axis=-1)
+    np.testing.assert_array_equal(m.labels_, d2.argmin(axis=1))
+    np.testing.assert_allclose(m.inertia_, d2.min(axis=1).sum(), rtol=1e-9)
+    np.testing.assert_array_equal(m.predict(x), m.labels_)
+    # Centres are the means of their members (Lloyd's fixed point).
+    for k in range(m.n_primitives):
+        members = p[m.labels_ == k]
+        if members.size:
+            np.testing.assert_allclose(m.cluster_centers_[k], members.mean(axis=0), atol=1e-6)
+
+
+def test_transform_of_trials_equals_transform_of_their_vectors():
+    m = fitted()
+    trials = list(default_trials()[:3])
+    from_trials = m.transform(trials)
+    first = np.flatnonzero(m.segment_trial_ < 3)
+    np.testing.assert_allclose(from_trials, m.transform(m.training_vectors_[first]), atol=1e-9)
+    np.testing.assert_array_equal(m.predict(trials), m.labels_[first])
+
+
+def test_transform_rejects_bad_input():
+    m = fitted()
+    with pytest.raises(ValueError, match=r"\(N, 400\)"):
+        m.transform(np.zeros((3, 399)))
+    with pytest.raises(ValueError, match="NaN"):
+        m.transform(np.full((1, 400), np.nan))
+
+
+def test_reconstruction_from_projection_and_cluster():
+    m = fitted()
+    x = m.training_vectors_[:50]
+    rec = m.reconstruct(x)
+    assert rec.shape == (50, 100, 4)
+    # Exactly E_f p + s̄ split into 4 curves of 100.
+    expected = to_curves(m.transform(x) @ m.components_.T + m.mean_)
+    np.testing.assert_allclose(rec, expected, atol=1e-12)
+    rec_c = m.reconstruct(x, source="cluster")
+    centre_curves = np.stack([m.primitive_angles(k) for k in m.labels_[:50]])
+    np.testing.assert_allclose(rec_c, centre_curves, atol=1e-12)
+    err_p = np.mean((rec - to_curves(x)) ** 2)
+    err_c = np.mean((rec_c - to_curves(x)) ** 2)
+    assert err_p < err_c
+    with pytest.raises(ValueError, match="source"):
+        m.reconstruct(x, source="median")
+
+
+def test_primitive_interface_for_the_simulation():
+    m = fitted()
+    a = m.primitive_angles(3)
+    assert a.shape == (100, 4)
+    expected = to_curves(m.cluster_centers_[3] @ m.components_.T + m.mean_)
+    np.testing.assert_allclose(a, expected, atol=1e-12)
+    with pytest.raises(IndexError):
+        m.primitive_angles(30)
+    durations = m.segment_ends_ - m.segment_starts_
+    for k in range(m.n_primitives):
+        members = durations[m.labels_ == k]
+        if members.size:
+            assert m.primitive_durations_[k] == pytest.approx(members.mean())
+    assert np.all((m.primitive_durations_ > 0.05) & (m.primitive_durations_ < 5.0))
+
+
+def test_reconstruct_movement_covers_the_movement_and_tracks_it():
+    m = fitted()
+    trial = default_trials()[7]
+    t, rec, orig = m.reconstruct_movement(trial, return_original=True)
+    assert rec.shape == orig.shape == (t.size, 4)
+    assert np.all(np.diff(t) > 0)
+    assert np.all(np.isin(t, trial.times))
+    # SEG-2 partitions the movement: most of the trial is covered.
+    assert t.size > 0.5 * trial.n_frames
+    rms_p = math.degrees(np.sqrt(np.mean((rec - orig) ** 2)))
+    _, rec_c = m.reconstruct_movement(trial, source="cluster")
+    rms_c = math.degrees(np.sqrt(np.mean((rec_c - orig) ** 2)))
+    # 30 eigenvectors keep > 99.9 % of the variance; the primitives are coarser.
+    assert rms_p < 1.0
+    assert rms_p < rms_c
+
+
+def test_fit_is_deterministic_for_a_seed():
+    trials = list(default_trials()[:40])
+    a = PrimitiveModel(n_clusters=8, seed=3).fit(trials)
+    b = PrimitiveModel(n_clusters=8, seed=3).fit(trials)
+    np.testing.assert_array_equal(a.labels_, b.labels_)
+    np.testing.assert_array_equal(a.cluster_centers_, b.cluster_centers_)
+    np.testing.assert_array_equal(a.eigenvectors_, b.eigenvectors_)
+
+
+def test_seg1_model_fits_and_refit_clears_state():
+    trials = list(default_trials()[:40])
+    m = PrimitiveModel(segmentation="seg1", n_clusters=5).fit(trials)
+    assert m.seg2_threshold_ is None
+    n1 = m.n_training_segments_
+    m.set_params(segmentation="seg2").fit(trials)
+    assert m.seg2_threshold_ is not None and m.n_training_segments_ != n1
