@@ -558,3 +558,27 @@ def test_bandai_labels_from_file_names() -> None:
 
 def test_gap_error_type_is_a_read_error() -> None:
     assert issubclass(GapError, ReadError) and issubclass(ReadError, ValueError)
+
+
+def test_marker_csv_dispatch_round_trip_and_options(tmp_path: Path) -> None:
+    from visprim.markers_csv import write_marker_csv
+
+    (tmp_path / "mix.bvh").write_text(_rig_bvh(MIXAMO, scale=100.0))
+    trial = read(tmp_path / "mix.bvh")
+    write_marker_csv(tmp_path / "mix.csv", trial)
+    back = read(tmp_path / "mix.csv")
+    # The CSV keeps 0.01 mm and 1 µs (visprim.markers_csv): the trial survives the trip.
+    assert np.abs(back.markers - trial.markers).max() <= 0.5e-5 + 1e-12
+    assert np.abs(back.times - trial.times).max() <= 0.5e-6 + 1e-12
+    assert read(tmp_path / "mix.csv", repetitions=3).repetitions == 3
+    with pytest.raises(ValueError, match="mirror= applies to bvh/amc/c3d files, not mix.csv"):
+        read(tmp_path / "mix.csv", mirror=True)
+    with pytest.raises(ValueError, match="one \\(right\\) arm"):
+        read(tmp_path / "mix.csv", arm="left")
+    both = read_many(tmp_path, mirror=True, arm="right")  # mirror only reaches the BVH
+    assert [Path(t.source).suffix for t in both] == [".bvh", ".csv"]
+    assert both[0].meta["mirrored"] is True
+    np.testing.assert_array_equal(both[1].markers, back.markers)
+    (tmp_path / "bad.csv").write_text("time_s,upper_arm_x_m\n0,1\n")
+    with pytest.raises(MalformedFileError, match=r"bad\.csv: "):
+        read(tmp_path / "bad.csv")

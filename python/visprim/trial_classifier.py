@@ -101,7 +101,9 @@ class PrimitiveHistogramClassifier(ClassifierMixin, BaseEstimator):  # type: ign
         if self.method not in METHODS:
             raise ValueError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
         if self.features not in FEATURES:
-            raise ValueError(f"features must be one of {', '.join(FEATURES)}, got {self.features!r}")
+            raise ValueError(
+                f"features must be one of {', '.join(FEATURES)}, got {self.features!r}"
+            )
         trials = list(trials)
         labels = np.asarray(list(y))
         if len(trials) != labels.shape[0]:
@@ -148,7 +150,8 @@ class GroupCrossValidation:
         lines = [f"leave-one-group-out accuracy {self.accuracy:.3f} ({right}/{n} trials)"]
         for g, acc in self.per_group.items():
             m = self.groups == g
-            lines.append(f"  {g}: {acc:.2f} ({int(np.sum(self.predictions[m] == self.labels[m]))}/{int(m.sum())})")
+            hits = int(np.sum(self.predictions[m] == self.labels[m]))
+            lines.append(f"  {g}: {acc:.2f} ({hits}/{int(m.sum())})")
         return "\n".join(lines)
 
 
@@ -181,7 +184,11 @@ def leave_one_group_out(
         pred[test] = clf.predict([t for t, m in zip(trials, test, strict=True) if m])
     per_group = {grp: float(np.mean(pred[g == grp] == y[g == grp])) for grp in order}
     return GroupCrossValidation(
-        accuracy=float(np.mean(pred == y)), predictions=pred, labels=y, groups=g, per_group=per_group
+        accuracy=float(np.mean(pred == y)),
+        predictions=pred,
+        labels=y,
+        groups=g,
+        per_group=per_group,
     )
 
 

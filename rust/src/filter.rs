@@ -326,13 +326,6 @@ pub fn sosfiltfilt_rows(
             "x is empty (shape ({n_rows}, {n})); nothing to filter"
         )));
     }
-    if let Some(i) = first_non_finite(x) {
-        return Err(Error::NonFinite(format!(
-            "x contains NaN or infinity (row {}, sample {})",
-            i / n,
-            i % n
-        )));
-    }
     let edge = resolve_padlen(sos, padlen);
     if n <= edge {
         return Err(Error::Shape(format!(
@@ -341,8 +334,8 @@ pub fn sosfiltfilt_rows(
         )));
     }
     let bases: Vec<usize> = (0..n_rows).map(|r| r * n).collect();
-    let mut out = vec![0.0; x.len()];
-    lanes::filtfilt_groups(
+    let mut out = crate::buffer::zeroed_f64(x.len());
+    let finite = lanes::filtfilt_groups(
         &sections(sos),
         x,
         &mut out,
@@ -353,6 +346,14 @@ pub fn sosfiltfilt_rows(
         }],
         edge,
     );
+    if !finite {
+        let i = first_non_finite(x).expect("a non-finite value was seen");
+        return Err(Error::NonFinite(format!(
+            "x contains NaN or infinity (row {}, sample {})",
+            i / n,
+            i % n
+        )));
+    }
     Ok(out)
 }
 
@@ -386,13 +387,6 @@ pub fn sosfiltfilt_ragged(
     }
     let total = values.len() / channels;
     let bounds = trial_bounds(offsets, total)?;
-    if let Some(i) = first_non_finite(values) {
-        return Err(Error::NonFinite(format!(
-            "values contains NaN or infinity (frame {}, channel {})",
-            i / channels,
-            i % channels
-        )));
-    }
     let edge = resolve_padlen(sos, padlen);
     if let Some((i, (s, e))) = bounds.iter().enumerate().find(|(_, (s, e))| e - s <= edge) {
         return Err(Error::Shape(format!(
@@ -416,8 +410,17 @@ pub fn sosfiltfilt_ragged(
             len,
         })
         .collect();
-    let mut out = vec![0.0; values.len()];
-    lanes::filtfilt_groups(&sections(sos), values, &mut out, &groups, edge);
+    let mut out = crate::buffer::zeroed_f64(values.len());
+    // Non-finite values are detected while the blocks are gathered (no extra pass over the
+    // corpus); located only if there is one.
+    if !lanes::filtfilt_groups(&sections(sos), values, &mut out, &groups, edge) {
+        let i = first_non_finite(values).expect("a non-finite value was seen");
+        return Err(Error::NonFinite(format!(
+            "values contains NaN or infinity (frame {}, channel {})",
+            i / channels,
+            i % channels
+        )));
+    }
     Ok(out)
 }
 

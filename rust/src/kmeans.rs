@@ -29,16 +29,13 @@
 
 use rayon::prelude::*;
 
-use crate::kmeanspp::{default_local_trials, kmeans_plusplus, Rng};
-use crate::sqdist::{sq_dist, sq_dists, Panel};
+use crate::kmeanspp::{default_local_trials, kmeans_plusplus, Rng, MAX_LOCAL_TRIALS};
+use crate::lloyd::lloyd;
+use crate::sqdist::{sq_dists, two_nearest, Panel};
 use crate::{Error, Result};
 
-pub static DBG_SCAN: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-pub static DBG_TIGHT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 /// Rows per distance-kernel call.
 const GROUP: usize = 64;
-/// Memory allowed for the per-chunk partial sums of the M-step.
-const PARTIAL_BYTES: usize = 128 << 20;
 
 /// Parameters of [`kmeans`].
 #[derive(Clone, Debug, PartialEq)]
@@ -95,7 +92,7 @@ pub fn kmeans(
     params: &KMeansParams,
     init: Option<&[f64]>,
 ) -> Result<KMeansResult> {
-    check_data(x, n, d, "X")?;
+    let stats = data_stats(x, n, d, "X")?;
     let k = params.k;
     if k < 1 || k > n {
         return Err(Error::InvalidArgument(format!(
@@ -118,11 +115,13 @@ pub fn kmeans(
         )));
     }
     let trials = params.n_local_trials.unwrap_or_else(|| default_local_trials(k));
-    if trials < 1 {
-        return Err(Error::InvalidArgument("n_local_trials must be ≥ 1".into()));
+    if !(1..=MAX_LOCAL_TRIALS).contains(&trials) {
+        return Err(Error::InvalidArgument(format!(
+            "n_local_trials must be between 1 and {MAX_LOCAL_TRIALS}, got {trials}"
+        )));
     }
-    let tol_abs = params.tol * mean_variance(x, n, d);
-    let diameter = 2.0 * max_row_radius(x, n, d);
+    let tol_abs = params.tol * stats.mean_variance;
+    let diameter = stats.diameter;
 
     if let Some(init) = init {
         if params.n_init != 1 {
@@ -138,19 +137,34 @@ pub fn kmeans(
             )));
         }
         check_data(init, k, d, "init")?;
-        return Ok(lloyd(x, n, d, init, k, params.max_iter, tol_abs, diameter));
+        return Ok(run(x, n, d, init, k, params.max_iter, tol_abs, diameter));
     }
 
     let mut best: Option<KMeansResult> = None;
-    for run in 0..params.n_init {
-        let mut rng = Rng::new(run_seed(params.seed, run as u64));
+    for r in 0..params.n_init {
+        let mut rng = Rng::new(run_seed(params.seed, r as u64));
         let (centers, _) = kmeans_plusplus(x, n, d, k, trials, &mut rng);
-        let res = lloyd(x, n, d, &centers, k, params.max_iter, tol_abs, diameter);
+        let res = run(x, n, d, &centers, k, params.max_iter, tol_abs, diameter);
         if best.as_ref().is_none_or(|b| res.inertia < b.inertia) {
             best = Some(res);
         }
     }
     Ok(best.expect("n_init ≥ 1"))
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run(
+    x: &[f64],
+    n: usize,
+    d: usize,
+    init: &[f64],
+    k: usize,
+    max_iter: usize,
+    tol_abs: f64,
+    diameter: f64,
+) -> KMeansResult {
+    let r = lloyd(x, n, d, init, k, max_iter, tol_abs, diameter);
+    KMeansResult { centers: r.centers, labels: r.labels, inertia: r.inertia, n_iter: r.n_iter, k, dim: d }
 }
 
 /// Nearest centre (lowest index on ties) and squared distance of every row of the row-major
@@ -197,53 +211,89 @@ pub fn predict(
     Ok((labels, dist))
 }
 
-/// `tol × mean(var(X, axis=0))`, scikit-learn's absolute tolerance, for `tol` given.
-pub fn mean_variance(x: &[f64], n: usize, d: usize) -> f64 {
-    let ch = crate::kmeanspp::CHUNK;
-    let sums: Vec<Vec<f64>> = x
-        .par_chunks(ch * d)
-        .map(|c| {
-            let mut s = vec![0.0; d];
-            for row in c.chunks_exact(d) {
-                s.iter_mut().zip(row).for_each(|(a, v)| *a += v);
-            }
-            s
-        })
-        .collect();
-    let mut mean = vec![0.0; d];
-    for s in &sums {
-        mean.iter_mut().zip(s).for_each(|(m, v)| *m += v);
-    }
-    mean.iter_mut().for_each(|m| *m /= n as f64);
-    let sq: Vec<f64> = x
-        .par_chunks(ch * d)
-        .map(|c| {
-            let mut s = 0.0;
-            for row in c.chunks_exact(d) {
-                for (v, m) in row.iter().zip(&mean) {
-                    s += (v - m) * (v - m);
-                }
-            }
-            s
-        })
-        .collect();
-    sq.iter().sum::<f64>() / (n as f64 * d as f64)
+/// Column statistics gathered in one pass over the data.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DataStats {
+    /// `mean(var(X, axis=0))` (scikit-learn scales `tol` by it).
+    pub mean_variance: f64,
+    /// Bound on the distances involved (data bounding box and distance from the origin).
+    pub diameter: f64,
 }
 
-fn max_row_radius(x: &[f64], n: usize, d: usize) -> f64 {
+/// Check `x` (finite, `n × d`, non-empty) and compute its [`DataStats`] in one parallel pass
+/// (per-chunk shifted sums combined in chunk order).
+pub fn data_stats(x: &[f64], n: usize, d: usize, name: &str) -> Result<DataStats> {
+    if n == 0 || d == 0 {
+        return Err(Error::Shape(format!(
+            "{name} is empty (shape {n}x{d}); need at least one row and one column"
+        )));
+    }
+    if x.len() != n * d {
+        return Err(Error::Shape(format!(
+            "{name} has {} values, expected {n} rows x {d} columns",
+            x.len()
+        )));
+    }
+    let shift = &x[..d];
+    let ch = crate::kmeanspp::CHUNK;
+    // Per chunk: first non-finite position, Σ (x - shift), Σ (x - shift)², min, max.
+    type Part = (Option<usize>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>);
+    let parts: Vec<Part> = x
+        .par_chunks(ch * d)
+        .enumerate()
+        .map(|(b, c)| {
+            let mut s1 = vec![0.0; d];
+            let mut s2 = vec![0.0; d];
+            let mut lo = vec![f64::INFINITY; d];
+            let mut hi = vec![f64::NEG_INFINITY; d];
+            // (v - v) is 0 for finite values and NaN otherwise: vectorizable finiteness test.
+            let mut nan = 0.0;
+            for row in c.chunks_exact(d) {
+                for j in 0..d {
+                    let v = row[j];
+                    nan += v - v;
+                    let t = v - shift[j];
+                    s1[j] += t;
+                    s2[j] += t * t;
+                    lo[j] = if v < lo[j] { v } else { lo[j] };
+                    hi[j] = if v > hi[j] { v } else { hi[j] };
+                }
+            }
+            let bad = if nan == 0.0 {
+                None
+            } else {
+                c.iter().position(|v| !v.is_finite()).map(|p| b * ch * d + p)
+            };
+            (bad, s1, s2, lo, hi)
+        })
+        .collect();
+    if let Some(pos) = parts.iter().find_map(|p| p.0) {
+        return Err(Error::NonFinite(format!(
+            "{name} contains NaN or infinity (row {}, column {})",
+            pos / d,
+            pos % d
+        )));
+    }
+    let mut s1 = vec![0.0; d];
+    let mut s2 = vec![0.0; d];
     let mut lo = vec![f64::INFINITY; d];
     let mut hi = vec![f64::NEG_INFINITY; d];
-    for row in x[..n * d].chunks_exact(d) {
+    for (_, a1, a2, l, h) in &parts {
         for j in 0..d {
-            lo[j] = lo[j].min(row[j]);
-            hi[j] = hi[j].max(row[j]);
+            s1[j] += a1[j];
+            s2[j] += a2[j];
+            lo[j] = lo[j].min(l[j]);
+            hi[j] = hi[j].max(h[j]);
         }
     }
-    // Half the diagonal of the bounding box, plus the box's distance from the origin (the
-    // rounding of coordinates scales with their magnitude).
+    let nf = n as f64;
+    let var_sum: f64 = (0..d).map(|j| (s2[j] / nf - (s1[j] / nf).powi(2)).max(0.0)).sum();
+    // Half the diagonal of the bounding box plus its farthest corner's distance from the
+    // origin (coordinate rounding scales with magnitude): covers every distance computed.
     let half: f64 = lo.iter().zip(&hi).map(|(a, b)| (b - a) * (b - a)).sum::<f64>().sqrt() / 2.0;
-    let far: f64 = lo.iter().zip(&hi).map(|(a, b)| a.abs().max(b.abs()).powi(2)).sum::<f64>().sqrt();
-    half + far
+    let far: f64 =
+        lo.iter().zip(&hi).map(|(a, b)| a.abs().max(b.abs()).powi(2)).sum::<f64>().sqrt();
+    Ok(DataStats { mean_variance: var_sum / d as f64, diameter: 2.0 * (half + far) })
 }
 
 fn run_seed(seed: u64, run: u64) -> u64 {
@@ -270,330 +320,6 @@ fn check_data(x: &[f64], n: usize, d: usize, name: &str) -> Result<()> {
         )));
     }
     Ok(())
-}
-
-/// Index of the smallest value (first on ties), that value, and the smallest of the others
-/// (`+inf` when there is a single value).
-#[inline]
-fn two_nearest(v: &[f64]) -> (usize, f64, f64) {
-    let mut best = 0;
-    let mut b = v[0];
-    let mut second = f64::INFINITY;
-    for (j, &x) in v.iter().enumerate().skip(1) {
-        if x < b {
-            second = b;
-            b = x;
-            best = j;
-        } else if x < second {
-            second = x;
-        }
-    }
-    (best, b, second)
-}
-
-/// Rows per chunk: fixed by `n`, `k`, `d` (never by the thread count). At least 1024 rows
-/// (and 4k, so the partial sums stay small next to the rows), and few enough chunks that the
-/// partial sums fit in [`PARTIAL_BYTES`].
-fn chunk_rows(n: usize, k: usize, d: usize) -> usize {
-    let max_chunks = (PARTIAL_BYTES / (k * d * 8).max(1)).max(1);
-    1024.max(4 * k).max(n.div_ceil(max_chunks)).min(n).max(1)
-}
-
-/// State of one Lloyd run with Hamerly bounds.
-struct Lloyd<'a> {
-    x: &'a [f64],
-    n: usize,
-    d: usize,
-    k: usize,
-    chunk: usize,
-    centers: Vec<f64>,
-    panel: Panel,
-    labels: Vec<u32>,
-    upper: Vec<f64>,
-    lower: Vec<f64>,
-    /// Per-chunk partial sums (`k × d`) and counts (`k`) of the rows of each cluster.
-    psums: Vec<f64>,
-    pcounts: Vec<u64>,
-    /// Centre drift of the last M-step, applied to the bounds at the next E-step.
-    drift: Vec<f64>,
-    pending_drift: bool,
-}
-
-#[allow(clippy::too_many_arguments)]
-fn lloyd(
-    x: &[f64],
-    n: usize,
-    d: usize,
-    init: &[f64],
-    k: usize,
-    max_iter: usize,
-    tol_abs: f64,
-    diameter: f64,
-) -> KMeansResult {
-    let chunk = chunk_rows(n, k, d);
-    let nchunks = n.div_ceil(chunk);
-    let mut st = Lloyd {
-        x,
-        n,
-        d,
-        k,
-        chunk,
-        centers: init.to_vec(),
-        panel: Panel::from_centers(init, k, d),
-        labels: vec![0; n],
-        upper: vec![f64::INFINITY; n],
-        lower: vec![0.0; n],
-        psums: vec![0.0; nchunks * k * d],
-        pcounts: vec![0; nchunks * k],
-        drift: vec![0.0; k],
-        pending_drift: false,
-    };
-    let mut strict = false;
-    let mut n_iter = 0;
-    let mut sums = vec![0.0; k * d];
-    let mut counts = vec![0u64; k];
-    for it in 0..max_iter {
-        n_iter = it + 1;
-        let slack = (1e-12 + 1e-15 * it as f64) * diameter;
-        let t0 = std::time::Instant::now();
-        let changed = st.e_step(it == 0, true, slack);
-        let t1 = t0.elapsed();
-        if std::env::var("KDBG").is_ok() { eprintln!("it {it} scan {} tight {} e {:?} total {:?}", DBG_SCAN.swap(0, std::sync::atomic::Ordering::Relaxed), DBG_TIGHT.swap(0, std::sync::atomic::Ordering::Relaxed), t1, t0.elapsed()); }
-        st.reduce(&mut sums, &mut counts);
-        if counts.contains(&0) {
-            st.relocate_empty(&mut sums, &mut counts);
-        }
-        let shift = st.m_step(&sums, &counts);
-        if !changed {
-            strict = true;
-            break;
-        }
-        if shift <= tol_abs {
-            break;
-        }
-    }
-    if !strict {
-        let slack = (1e-12 + 1e-15 * n_iter as f64) * diameter;
-        st.e_step(false, false, slack);
-    }
-    let inertia = st.inertia();
-    KMeansResult {
-        centers: st.centers,
-        labels: st.labels,
-        inertia,
-        n_iter,
-        k,
-        dim: d,
-    }
-}
-
-impl Lloyd<'_> {
-    /// Assign rows to centres; with `partials`, refresh the partial sums of chunks whose
-    /// labels changed. Returns whether any label changed (always true when `first`).
-    fn e_step(&mut self, first: bool, partials: bool, slack: f64) -> bool {
-        let (x, d, k, ch) = (self.x, self.d, self.k, self.chunk);
-        // Half the distance from each centre to its nearest other centre.
-        let half = self.half_separation();
-        // Largest and second largest drift, for the lower bounds.
-        let (mut p1, mut p2, mut arg1) = (0.0f64, 0.0f64, usize::MAX);
-        if self.pending_drift {
-            for (j, &p) in self.drift.iter().enumerate() {
-                if p > p1 {
-                    p2 = p1;
-                    p1 = p;
-                    arg1 = j;
-                } else if p > p2 {
-                    p2 = p;
-                }
-            }
-        }
-        let drift = if self.pending_drift { Some(&self.drift[..]) } else { None };
-        let (centers, panel) = (&self.centers, &self.panel);
-        let changed: Vec<bool> = self
-            .labels
-            .par_chunks_mut(ch)
-            .zip(self.upper.par_chunks_mut(ch))
-            .zip(self.lower.par_chunks_mut(ch))
-            .zip(self.psums.par_chunks_mut(k * d))
-            .zip(self.pcounts.par_chunks_mut(k))
-            .enumerate()
-            .map(|(b, ((((lab, up), lo), ps), pc))| {
-                let base = b * ch;
-                let mut changed = first;
-                let mut scan: Vec<usize> = Vec::new();
-                for i in 0..lab.len() {
-                    let a = lab[i] as usize;
-                    if let Some(p) = drift {
-                        up[i] += p[a];
-                        lo[i] -= if a == arg1 { p2 } else { p1 };
-                    }
-                    let m = half[a].max(lo[i]);
-                    if up[i] + slack < m {
-                        continue;
-                    }
-                    if up[i].is_finite() {
-                        let row = &x[(base + i) * d..(base + i + 1) * d];
-                        DBG_TIGHT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        let u = sq_dist(row, &centers[a * d..(a + 1) * d]).sqrt();
-                        up[i] = u;
-                        if u + slack < m {
-                            continue;
-                        }
-                    }
-                    scan.push(i);
-                }
-                DBG_SCAN.fetch_add(scan.len(), std::sync::atomic::Ordering::Relaxed);
-                let kp = panel.kpad();
-                let mut buf = vec![0.0; GROUP.min(scan.len()) * kp];
-                for group in scan.chunks(GROUP) {
-                    let rows: Vec<&[f64]> =
-                        group.iter().map(|&i| &x[(base + i) * d..(base + i + 1) * d]).collect();
-                    sq_dists(&rows, panel, &mut buf);
-                    for (r, &i) in group.iter().enumerate() {
-                        let (best, bd, sd) = two_nearest(&buf[r * kp..r * kp + k]);
-                        if best as u32 != lab[i] {
-                            lab[i] = best as u32;
-                            changed = true;
-                        }
-                        up[i] = bd.sqrt();
-                        lo[i] = sd.sqrt();
-                    }
-                }
-                if partials && changed {
-                    ps.fill(0.0);
-                    pc.fill(0);
-                    for (i, &l) in lab.iter().enumerate() {
-                        let l = l as usize;
-                        let row = &x[(base + i) * d..(base + i + 1) * d];
-                        ps[l * d..(l + 1) * d].iter_mut().zip(row).for_each(|(s, v)| *s += v);
-                        pc[l] += 1;
-                    }
-                }
-                changed
-            })
-            .collect();
-        self.pending_drift = false;
-        changed.contains(&true)
-    }
-
-    /// `0.5 × min_{j' ≠ j} ‖c_j - c_j'‖` for every centre (`+inf` when k = 1).
-    fn half_separation(&self) -> Vec<f64> {
-        let (k, d) = (self.k, self.d);
-        let kp = self.panel.kpad();
-        (0..k)
-            .into_par_iter()
-            .with_min_len(16)
-            .map(|j| {
-                let row: [&[f64]; 1] = [&self.centers[j * d..(j + 1) * d]];
-                let mut buf = vec![0.0; kp];
-                sq_dists(&row, &self.panel, &mut buf);
-                let m = buf[..k]
-                    .iter()
-                    .enumerate()
-                    .filter(|&(i, _)| i != j)
-                    .fold(f64::INFINITY, |m, (_, &v)| m.min(v));
-                0.5 * m.sqrt()
-            })
-            .collect()
-    }
-
-    /// Totals of the per-chunk partial sums, added in chunk order.
-    fn reduce(&self, sums: &mut [f64], counts: &mut [u64]) {
-        let (k, d) = (self.k, self.d);
-        let nchunks = self.n.div_ceil(self.chunk);
-        sums.par_chunks_mut(d).zip(counts.par_iter_mut()).enumerate().for_each(|(j, (s, c))| {
-            s.fill(0.0);
-            *c = 0;
-            for b in 0..nchunks {
-                let p = &self.psums[(b * k + j) * d..(b * k + j + 1) * d];
-                s.iter_mut().zip(p).for_each(|(a, v)| *a += v);
-                *c += self.pcounts[b * k + j];
-            }
-        });
-    }
-
-    /// Re-seed empty clusters with the rows farthest from their own centre.
-    fn relocate_empty(&self, sums: &mut [f64], counts: &mut [u64]) {
-        let (x, d) = (self.x, self.d);
-        let dist: Vec<f64> = (0..self.n)
-            .into_par_iter()
-            .with_min_len(1024)
-            .map(|i| {
-                let a = self.labels[i] as usize;
-                sq_dist(&x[i * d..(i + 1) * d], &self.centers[a * d..(a + 1) * d])
-            })
-            .collect();
-        if dist.iter().all(|&v| v == 0.0) {
-            return;
-        }
-        let empty: Vec<usize> = (0..self.k).filter(|&j| counts[j] == 0).collect();
-        let mut order: Vec<usize> = (0..self.n).collect();
-        let cmp = |a: &usize, b: &usize| dist[*b].total_cmp(&dist[*a]).then(a.cmp(b));
-        let m = empty.len().min(self.n);
-        if m < self.n {
-            order.select_nth_unstable_by(m, cmp);
-        }
-        order.truncate(m);
-        order.sort_by(cmp);
-        for (&j, &far) in empty.iter().zip(&order) {
-            let old = self.labels[far] as usize;
-            let row = &x[far * d..(far + 1) * d];
-            for t in 0..d {
-                sums[old * d + t] -= row[t];
-                sums[j * d + t] = row[t];
-            }
-            counts[old] -= 1;
-            counts[j] = 1;
-        }
-    }
-
-    /// New centres from the sums; records the drift and returns `Σ_j ‖Δc_j‖²`.
-    fn m_step(&mut self, sums: &[f64], counts: &[u64]) -> f64 {
-        let d = self.d;
-        let mut total = 0.0;
-        for j in 0..self.k {
-            let c = &mut self.centers[j * d..(j + 1) * d];
-            let mut sq = 0.0;
-            if counts[j] > 0 {
-                let alpha = 1.0 / counts[j] as f64;
-                for t in 0..d {
-                    let v = sums[j * d + t] * alpha;
-                    sq += (v - c[t]) * (v - c[t]);
-                    c[t] = v;
-                }
-            }
-            self.drift[j] = sq.sqrt();
-            total += sq;
-        }
-        self.panel.set(&self.centers, self.k);
-        self.pending_drift = true;
-        total
-    }
-
-    fn inertia(&self) -> f64 {
-        let (x, d, ch) = (self.x, self.d, self.chunk);
-        let parts: Vec<f64> = self
-            .labels
-            .par_chunks(ch)
-            .enumerate()
-            .map(|(b, lab)| {
-                lab.iter()
-                    .enumerate()
-                    .map(|(i, &l)| {
-                        let r = b * ch + i;
-                        let l = l as usize;
-                        let mut s = 0.0;
-                        for t in 0..d {
-                            let diff = x[r * d + t] - self.centers[l * d + t];
-                            s += diff * diff;
-                        }
-                        s
-                    })
-                    .sum()
-            })
-            .collect();
-        parts.iter().sum()
-    }
 }
 
 #[cfg(test)]
@@ -631,7 +357,7 @@ mod tests {
                 })
                 .collect()
         };
-        let tol_abs = tol * mean_variance(x, n, d);
+        let tol_abs = tol * data_stats(x, n, d, "X").unwrap().mean_variance;
         let mut c = init.to_vec();
         let mut old: Option<Vec<u32>> = None;
         let mut labels = Vec::new();

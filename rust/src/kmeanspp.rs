@@ -68,8 +68,40 @@ pub fn default_local_trials(k: usize) -> usize {
     2 + (k as f64).ln().floor() as usize
 }
 
+/// Largest supported number of local trials (candidates are tracked in a 64-bit mask).
+pub const MAX_LOCAL_TRIALS: usize = 64;
+
+/// Rows of one cluster of the partition "nearest centre so far".
+#[derive(Clone, Debug, Default)]
+struct Cluster {
+    /// Row indices, ascending.
+    members: Vec<u32>,
+    /// `Σ D(x)²` over the members, summed in member order.
+    pot: f64,
+    /// `max D(x)²` over the members.
+    radius2: f64,
+}
+
+impl Cluster {
+    fn from_members(members: Vec<u32>, closest: &[f64]) -> Self {
+        let mut pot = 0.0;
+        let mut radius2 = 0.0f64;
+        for &i in &members {
+            let v = closest[i as usize];
+            pot += v;
+            radius2 = radius2.max(v);
+        }
+        Self { members, pot, radius2 }
+    }
+}
+
 /// Choose `k` seeds among the rows of the row-major `n × d` matrix `x` (`1 ≤ k ≤ n`, finite
-/// values, checked by the caller). Returns the row-major `k × d` centres and their row indices.
+/// values, `1 ≤ n_local_trials ≤ 64`, checked by the caller). Returns the row-major `k × d`
+/// centres and their row indices.
+///
+/// Exact pruning (Raff, "Exact acceleration of k-means++", 2021): rows are grouped by their
+/// nearest centre `c`; a candidate `t` cannot bring any row of that group closer when
+/// `‖c - t‖ ≥ 2·max D(x)` over the group (triangle inequality), so such groups are skipped.
 pub fn kmeans_plusplus(
     x: &[f64],
     n: usize,
@@ -78,41 +110,37 @@ pub fn kmeans_plusplus(
     n_local_trials: usize,
     rng: &mut Rng,
 ) -> (Vec<f64>, Vec<usize>) {
-    assert!(k >= 1 && k <= n && x.len() == n * d && n_local_trials >= 1);
+    assert!(k >= 1 && k <= n && x.len() == n * d);
+    assert!((1..=MAX_LOCAL_TRIALS).contains(&n_local_trials));
     let trials = n_local_trials;
+    let row = |i: usize| &x[i * d..(i + 1) * d];
     let mut indices = Vec::with_capacity(k);
     indices.push(rng.below(n));
+    let mut centers: Vec<f64> = row(indices[0]).to_vec();
 
     // closest[i]: squared distance of row i to its nearest centre so far.
     let mut closest = vec![0.0; n];
     let first = Panel::from_rows(x, d, &indices);
-    let mut chunk_pot: Vec<f64> = closest
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .map(|(b, dst)| {
-            let mut buf = vec![0.0; GROUP * first.kpad()];
-            let kp = first.kpad();
-            for (g, dg) in dst.chunks_mut(GROUP).enumerate() {
-                let start = b * CHUNK + g * GROUP;
-                let rows: Vec<&[f64]> =
-                    (start..start + dg.len()).map(|i| &x[i * d..(i + 1) * d]).collect();
-                sq_dists(&rows, &first, &mut buf);
-                for (r, v) in dg.iter_mut().enumerate() {
-                    *v = buf[r * kp];
-                }
+    closest.par_chunks_mut(CHUNK).enumerate().for_each(|(b, dst)| {
+        let kp = first.kpad();
+        let mut buf = vec![0.0; GROUP * kp];
+        for (g, dg) in dst.chunks_mut(GROUP).enumerate() {
+            let start = b * CHUNK + g * GROUP;
+            let rows: Vec<&[f64]> = (start..start + dg.len()).map(row).collect();
+            sq_dists(&rows, &first, &mut buf);
+            for (r, v) in dg.iter_mut().enumerate() {
+                *v = buf[r * kp];
             }
-            dst.iter().sum()
-        })
-        .collect();
+        }
+    });
+    let mut clusters = vec![Cluster::from_members((0..n as u32).collect(), &closest)];
 
-    // mins[i * trials + t] = min(closest[i], ‖x_i - candidate t‖²)
-    let mut mins = vec![0.0; n * trials];
     let mut candidates = vec![0usize; trials];
-    for _ in 1..k {
-        let pot: f64 = chunk_pot.iter().sum();
-        for c in candidates.iter_mut() {
-            *c = if pot > 0.0 {
-                sample(&closest, &chunk_pot, rng.uniform() * pot)
+    for c in 1..k {
+        let pot: f64 = clusters.iter().map(|cl| cl.pot).sum();
+        for cand in candidates.iter_mut() {
+            *cand = if pot > 0.0 {
+                sample(&clusters, &closest, rng.uniform() * pot)
             } else {
                 // Every row coincides with a centre: any row is as good as another.
                 rng.below(n)
@@ -120,82 +148,170 @@ pub fn kmeans_plusplus(
         }
         let panel = Panel::from_rows(x, d, &candidates);
         let kp = panel.kpad();
-        let partial: Vec<Vec<f64>> = mins
-            .par_chunks_mut(CHUNK * trials)
-            .zip(closest.par_chunks(CHUNK))
-            .enumerate()
-            .map(|(b, (m, cl))| {
+
+        // Which candidates may improve which clusters.
+        let crow: Vec<&[f64]> = centers.chunks_exact(d).collect();
+        let mut cc = vec![0.0; c * kp];
+        sq_dists(&crow, &panel, &mut cc);
+        let masks: Vec<u64> = (0..c)
+            .map(|j| {
+                let lim = 4.0 * clusters[j].radius2;
+                (0..trials).filter(|&t| cc[j * kp + t] < lim).fold(0u64, |m, t| m | (1 << t))
+            })
+            .collect();
+
+        // Distances of the rows of every concerned cluster to the candidates, in blocks.
+        let mut items: Vec<(usize, usize, usize)> = Vec::new();
+        for j in 0..c {
+            if masks[j] != 0 {
+                let len = clusters[j].members.len();
+                for s in (0..len).step_by(CHUNK) {
+                    items.push((j, s, (s + CHUNK).min(len)));
+                }
+            }
+        }
+        // Per item: the rows whose distances were computed (position in the item, distances
+        // to the candidates), and Σ min(D, d_t) per candidate. A row is only compared with
+        // candidate t when ‖c - t‖² < 4·D(x)² (otherwise t cannot be closer than its centre).
+        let results: Vec<(Vec<(u32, usize)>, Vec<f64>, Vec<f64>)> = items
+            .par_iter()
+            .map(|&(j, s, e)| {
+                let members = &clusters[j].members[s..e];
+                let ccj = &cc[j * kp..j * kp + trials];
+                let reach = ccj.iter().fold(f64::INFINITY, |m, &v| m.min(v)) / 4.0;
                 let mut pots = vec![0.0; trials];
+                let mut computed: Vec<(u32, usize)> = Vec::new();
+                for (r, &i) in members.iter().enumerate() {
+                    let di = closest[i as usize];
+                    if di > reach {
+                        computed.push((r as u32, i as usize));
+                    } else {
+                        pots.iter_mut().for_each(|p| *p += di);
+                    }
+                }
+                let mut dist = vec![0.0; computed.len() * trials];
                 let mut buf = vec![0.0; GROUP * kp];
-                for (g, clg) in cl.chunks(GROUP).enumerate() {
-                    let start = b * CHUNK + g * GROUP;
-                    let rows: Vec<&[f64]> =
-                        (start..start + clg.len()).map(|i| &x[i * d..(i + 1) * d]).collect();
+                for (g, grp) in computed.chunks(GROUP).enumerate() {
+                    let rows: Vec<&[f64]> = grp.iter().map(|&(_, i)| row(i)).collect();
                     sq_dists(&rows, &panel, &mut buf);
-                    for (r, &c) in clg.iter().enumerate() {
-                        let mrow = &mut m[(g * GROUP + r) * trials..(g * GROUP + r + 1) * trials];
+                    for (r, &(_, i)) in grp.iter().enumerate() {
+                        let di = closest[i];
+                        let out = &mut dist[(g * GROUP + r) * trials..(g * GROUP + r + 1) * trials];
                         for t in 0..trials {
-                            let v = buf[r * kp + t].min(c);
-                            mrow[t] = v;
-                            pots[t] += v;
+                            let v = buf[r * kp + t];
+                            let useful = 4.0 * di > ccj[t];
+                            out[t] = if useful { v } else { f64::INFINITY };
+                            pots[t] += if useful { v.min(di) } else { di };
                         }
                     }
                 }
-                pots
+                let positions = computed.iter().map(|&(r, _)| (r, 0)).collect();
+                (positions, dist, pots)
             })
             .collect();
+
+        if std::env::var("KDBG").is_ok() { eprintln!("c {c} items {} computed {} active clusters {}", items.len(), results.iter().map(|r| r.0.len()).sum::<usize>(), masks.iter().filter(|&&m| m != 0).count()); }
+        // Potential left by each candidate; keep the smallest (first on ties).
         let mut best = 0;
         let mut best_pot = f64::INFINITY;
         for t in 0..trials {
-            let p: f64 = partial.iter().map(|v| v[t]).sum();
+            let mut p = 0.0;
+            let mut it = 0;
+            for j in 0..c {
+                if masks[j] == 0 {
+                    p += clusters[j].pot;
+                    continue;
+                }
+                let mut pj = 0.0;
+                while it < items.len() && items[it].0 == j {
+                    pj += results[it].2[t];
+                    it += 1;
+                }
+                p += pj;
+            }
             if p < best_pot {
                 best_pot = p;
                 best = t;
             }
         }
         indices.push(candidates[best]);
-        chunk_pot = closest
-            .par_chunks_mut(CHUNK)
-            .zip(mins.par_chunks(CHUNK * trials))
-            .map(|(cl, m)| {
-                let mut s = 0.0;
-                for (i, v) in cl.iter_mut().enumerate() {
-                    *v = m[i * trials + best];
-                    s += *v;
+        centers.extend_from_slice(row(candidates[best]));
+
+        // Move the rows that the new centre brings closer.
+        let mut first_item = vec![usize::MAX; c];
+        for (it, &(j, _, _)) in items.iter().enumerate().rev() {
+            first_item[j] = it;
+        }
+        let touched: Vec<usize> = (0..c).filter(|&j| masks[j] >> best & 1 == 1).collect();
+        let moved: Vec<(Vec<u32>, Vec<(u32, f64)>)> = touched
+            .par_iter()
+            .map(|&j| {
+                let mut keep = Vec::with_capacity(clusters[j].members.len());
+                let mut movers = Vec::new();
+                let mut it = first_item[j];
+                let members = &clusters[j].members;
+                while it < items.len() && items[it].0 == j {
+                    let (_, s, e) = items[it];
+                    let (positions, dist) = (&results[it].0, &results[it].1);
+                    let mut next = 0;
+                    for (r, &i) in members[s..e].iter().enumerate() {
+                        if next < positions.len() && positions[next].0 as usize == r {
+                            let v = dist[next * trials + best];
+                            next += 1;
+                            if v < closest[i as usize] {
+                                movers.push((i, v));
+                                continue;
+                            }
+                        }
+                        keep.push(i);
+                    }
+                    it += 1;
                 }
-                s
+                (keep, movers)
             })
             .collect();
-    }
-    let mut centers = Vec::with_capacity(k * d);
-    for &i in &indices {
-        centers.extend_from_slice(&x[i * d..(i + 1) * d]);
+        let mut new_members: Vec<u32> = Vec::new();
+        for (&j, (keep, movers)) in touched.iter().zip(moved) {
+            for &(i, v) in &movers {
+                closest[i as usize] = v;
+                new_members.push(i);
+            }
+            if !movers.is_empty() {
+                clusters[j] = Cluster::from_members(keep, &closest);
+            }
+        }
+        new_members.sort_unstable();
+        clusters.push(Cluster::from_members(new_members, &closest));
     }
     (centers, indices)
 }
 
-/// Row where the running sum of `weights` first exceeds `r` (`0 ≤ r < Σ weights`), using the
-/// per-chunk sums to skip whole chunks.
-fn sample(weights: &[f64], chunk_sums: &[f64], r: f64) -> usize {
+/// Row where the running sum of `D(x)²`, cluster by cluster and in member order, first
+/// exceeds `r` (`0 ≤ r < Σ D(x)²`).
+fn sample(clusters: &[Cluster], closest: &[f64], r: f64) -> usize {
     let mut acc = 0.0;
-    for (b, &s) in chunk_sums.iter().enumerate() {
-        if acc + s > r {
-            let start = b * CHUNK;
-            for (i, &w) in weights[start..(start + CHUNK).min(weights.len())].iter().enumerate() {
-                acc += w;
+    for cl in clusters {
+        if acc + cl.pot > r {
+            for &i in &cl.members {
+                acc += closest[i as usize];
                 if acc > r {
-                    return start + i;
+                    return i as usize;
                 }
             }
-            // Rounding: fall back to the chunk's last row with a positive weight.
-            return (start..(start + CHUNK).min(weights.len()))
-                .rev()
-                .find(|&i| weights[i] > 0.0)
-                .unwrap_or(start);
+            // Rounding: fall back to the cluster's last row with a positive weight.
+            if let Some(&i) = cl.members.iter().rev().find(|&&i| closest[i as usize] > 0.0) {
+                return i as usize;
+            }
         }
-        acc += s;
+        acc += cl.pot;
     }
-    weights.iter().rposition(|&w| w > 0.0).unwrap_or(0)
+    // Rounding at the very end: the last row with a positive weight.
+    clusters
+        .iter()
+        .rev()
+        .flat_map(|cl| cl.members.iter().rev())
+        .find(|&&i| closest[i as usize] > 0.0)
+        .map_or(0, |&i| i as usize)
 }
 
 #[cfg(test)]
@@ -222,12 +338,77 @@ mod tests {
 
     #[test]
     fn sample_respects_weights() {
-        let w = vec![0.0, 1.0, 0.0, 3.0];
-        let sums = vec![4.0];
-        assert_eq!(sample(&w, &sums, 0.0), 1);
-        assert_eq!(sample(&w, &sums, 0.999), 1);
-        assert_eq!(sample(&w, &sums, 1.0), 3);
-        assert_eq!(sample(&w, &sums, 3.999), 3);
+        let w = vec![0.0, 1.0, 0.0, 3.0, 2.0];
+        let clusters = vec![
+            Cluster::from_members(vec![0, 1, 3], &w),
+            Cluster::from_members(vec![2, 4], &w),
+        ];
+        assert_eq!(sample(&clusters, &w, 0.0), 1);
+        assert_eq!(sample(&clusters, &w, 0.999), 1);
+        assert_eq!(sample(&clusters, &w, 1.0), 3);
+        assert_eq!(sample(&clusters, &w, 3.999), 3);
+        assert_eq!(sample(&clusters, &w, 4.0), 4);
+        assert_eq!(sample(&clusters, &w, 5.999), 4);
+    }
+
+    /// Plain greedy k-means++ (no pruning) with the same random draws.
+    fn brute(x: &[f64], n: usize, d: usize, k: usize, trials: usize, seed: u64) -> Vec<usize> {
+        let mut rng = Rng::new(seed);
+        let dist = |i: usize, j: usize| -> f64 {
+            let mut acc = 0.0f64;
+            for t in 0..d {
+                let v = x[i * d + t] - x[j * d + t];
+                acc = v.mul_add(v, acc);
+            }
+            acc
+        };
+        let mut idx = vec![rng.below(n)];
+        let mut closest: Vec<f64> = (0..n).map(|i| dist(i, idx[0])).collect();
+        let mut members: Vec<Vec<u32>> = vec![(0..n as u32).collect()];
+        let mut assign = vec![0usize; n];
+        for c in 1..k {
+            let clusters: Vec<Cluster> =
+                members.iter().map(|m| Cluster::from_members(m.clone(), &closest)).collect();
+            let pot: f64 = clusters.iter().map(|cl| cl.pot).sum();
+            let cands: Vec<usize> = (0..trials)
+                .map(|_| if pot > 0.0 { sample(&clusters, &closest, rng.uniform() * pot) } else { rng.below(n) })
+                .collect();
+            let pots: Vec<f64> = cands
+                .iter()
+                .map(|&t| (0..n).map(|i| closest[i].min(dist(i, t))).sum())
+                .collect();
+            let best = (0..trials).fold(0, |b, t| if pots[t] < pots[b] { t } else { b });
+            let t = cands[best];
+            idx.push(t);
+            members.push(Vec::new());
+            for i in 0..n {
+                let v = dist(i, t);
+                if v < closest[i] {
+                    closest[i] = v;
+                    assign[i] = c;
+                }
+            }
+            members = (0..=c).map(|j| (0..n as u32).filter(|&i| assign[i as usize] == j).collect()).collect();
+        }
+        idx
+    }
+
+    #[test]
+    fn pruning_keeps_the_brute_force_choices() {
+        // Clustered data, so that pruning actually skips groups.
+        let mut rng = Rng::new(8);
+        let (n, d) = (3000, 3);
+        let mut x = Vec::with_capacity(n * d);
+        for i in 0..n {
+            let blob = (i % 12) as f64;
+            for t in 0..d {
+                x.push(blob * 10.0 * (t as f64 + 1.0) + rng.uniform());
+            }
+        }
+        for seed in 0..4 {
+            let (_, idx) = kmeans_plusplus(&x, n, d, 30, 3, &mut Rng::new(seed));
+            assert_eq!(idx, brute(&x, n, d, 30, 3, seed), "seed {seed}");
+        }
     }
 
     #[test]

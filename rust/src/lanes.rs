@@ -1,8 +1,8 @@
 //! Lockstep engine of `sosfiltfilt`: many equal-length signals filtered at once.
 //!
 //! The biquad recursion of ONE signal is latency-bound (each output needs the previous state,
-//! two dependent multiply-adds per sample and section). Here up to 32 signals (see [`lanes_at`]) of equal
-//! length are copied into a lane-major block (`buf[t][lane]`, odd extension included), and the
+//! two dependent multiply-adds per sample and section). Here up to 32 signals (see
+//! [`lanes_at`]) of equal length are copied into a lane-major block (`buf[t][lane]`, odd extension included), and the
 //! recursion runs section by section over the block with the lanes innermost, so the inner loop
 //! is plain element-wise SIMD over lanes and the lanes' dependency chains overlap. Blocks are
 //! distributed over threads with rayon.
@@ -93,9 +93,10 @@ impl Level {
 ///
 /// * `FMA = false`: scipy's expression order, bit for bit.
 /// * `FMA = true`: the same recursion with fused multiply-adds.
-/// * `UNIT = true` (only with FMA): a section with `b0 == 1` and `b2 == 1` (every Butterworth
-///   section but the first); multiplying by those exact ones is skipped, which changes no bit of
-///   the result but frees the FMA units for other lanes.
+/// * `UNIT = true` (only with FMA): a section with numerator exactly `[1, 2, 1]` (a double zero
+///   at -1: every low-pass Butterworth section but the first). The multiplications by 1 and 2
+///   become additions (`2 x + z1 = (x + x) + z1`, `x + x` being exact), which changes no bit of
+///   the result but moves work from the FMA units to the adders.
 #[inline(always)]
 fn biquad<const FMA: bool, const UNIT: bool>(
     s: &Section,
@@ -106,7 +107,7 @@ fn biquad<const FMA: bool, const UNIT: bool>(
     if FMA {
         if UNIT {
             let y = x + *z0;
-            *z0 = (-s.a1).mul_add(y, s.b1.mul_add(x, *z1));
+            *z0 = (-s.a1).mul_add(y, (x + x) + *z1);
             *z1 = (-s.a2).mul_add(y, x);
             y
         } else {
@@ -183,7 +184,7 @@ fn pass2<const W: usize, const FMA: bool, const FORWARD: bool, const U0: bool, c
 /// Whether a section may take the `UNIT` path.
 #[inline(always)]
 fn unit(s: &Section) -> bool {
-    s.b0 == 1.0 && s.b2 == 1.0
+    s.b0 == 1.0 && s.b1 == 2.0 && s.b2 == 1.0
 }
 
 /// All sections over the block in one direction, two at a time.
@@ -272,28 +273,165 @@ struct OutPtr(*mut f64);
 unsafe impl Send for OutPtr {}
 unsafe impl Sync for OutPtr {}
 
-/// Copies the block's signals into `buf` (lane-major, odd extension of `edge` samples at both
-/// ends; unused lanes zero), filters, and writes the filtered signals to `out`.
-#[allow(clippy::too_many_arguments)]
-fn do_block<const W: usize>(
-    level: Level,
-    sections: &[Section],
-    src: &[f64],
+/// The signals of one block: signal `j` is `src[bases[j] + t * stride]`, `t < len`, and goes to
+/// the same positions of `out`. Built only by [`Job::new`], which checks the bounds.
+#[derive(Clone, Copy)]
+struct Job<'a> {
+    src: &'a [f64],
     out: OutPtr,
-    out_len: usize,
-    bases: &[usize],
+    bases: &'a [usize],
     stride: usize,
     len: usize,
     edge: usize,
+}
+
+impl<'a> Job<'a> {
+    fn new(
+        src: &'a [f64],
+        out: OutPtr,
+        out_len: usize,
+        bases: &'a [usize],
+        stride: usize,
+        len: usize,
+        edge: usize,
+    ) -> Self {
+        assert!(len > edge && src.len() == out_len);
+        for &b in bases {
+            assert!(b + (len - 1) * stride < src.len());
+        }
+        Job {
+            src,
+            out,
+            bases,
+            stride,
+            len,
+            edge,
+        }
+    }
+}
+
+/// If the block's signals come in runs of adjacent positions (the channels of one trial in a
+/// `(frames, channels)` corpus), the run length; else 1.
+fn run_length(bases: &[usize]) -> usize {
+    let r = bases
+        .windows(2)
+        .position(|w| w[1] != w[0] + 1)
+        .map_or(bases.len(), |p| p + 1);
+    let uniform = bases.len() % r == 0
+        && bases
+            .chunks_exact(r)
+            .all(|c| c.windows(2).all(|w| w[1] == w[0] + 1));
+    if uniform {
+        r
+    } else {
+        1
+    }
+}
+
+/// Gathers runs of `R` adjacent values per time step into `body` (`len` rows).
+#[inline(always)]
+fn gather_runs<const W: usize, const R: usize>(body: &mut [[f64; W]], job: &Job) {
+    debug_assert!(job.bases.len() <= W && job.bases.len() % R == 0);
+    for (t, row) in body.iter_mut().enumerate() {
+        let off = t * job.stride;
+        for (j, run) in job.bases.chunks_exact(R).enumerate() {
+            // SAFETY: `run[0] + off + R - 1 = run[R - 1] + off`, a base checked by `Job::new`
+            // (runs are adjacent positions); `j * R + R <= bases.len() <= W`.
+            unsafe {
+                std::ptr::copy_nonoverlapping(
+                    job.src.as_ptr().add(run[0] + off),
+                    row.as_mut_ptr().add(j * R),
+                    R,
+                )
+            };
+        }
+    }
+}
+
+/// Scatters runs of `R` adjacent values per time step from `body` to the output.
+///
+/// SAFETY (caller): no other thread writes these signals' positions.
+#[inline(always)]
+unsafe fn scatter_runs<const W: usize, const R: usize>(body: &[[f64; W]], job: &Job) {
+    for (t, row) in body.iter().enumerate() {
+        let off = t * job.stride;
+        for (j, run) in job.bases.chunks_exact(R).enumerate() {
+            // SAFETY: in bounds as in `gather_runs` (`out` has the length of `src`); exclusive
+            // by the caller's contract.
+            unsafe {
+                std::ptr::copy_nonoverlapping(
+                    row.as_ptr().add(j * R),
+                    job.out.0.add(run[0] + off),
+                    R,
+                )
+            };
+        }
+    }
+}
+
+/// Gathers lane by lane (contiguous reads when `stride == 1`, i.e. one signal per row).
+#[inline(always)]
+fn gather_lanes<const W: usize>(body: &mut [[f64; W]], job: &Job) {
+    for (l, &b) in job.bases.iter().enumerate() {
+        if job.stride == 1 {
+            for (row, &v) in body.iter_mut().zip(&job.src[b..b + job.len]) {
+                row[l] = v;
+            }
+        } else {
+            for (t, row) in body.iter_mut().enumerate() {
+                row[l] = job.src[b + t * job.stride];
+            }
+        }
+    }
+}
+
+/// Scatters lane by lane. SAFETY (caller): as [`scatter_runs`].
+#[inline(always)]
+unsafe fn scatter_lanes<const W: usize>(body: &[[f64; W]], job: &Job) {
+    for (l, &b) in job.bases.iter().enumerate() {
+        for (t, row) in body.iter().enumerate() {
+            // SAFETY: `b + t * stride` is in bounds (`Job::new`); exclusive by contract.
+            unsafe { *job.out.0.add(b + t * job.stride) = row[l] };
+        }
+    }
+}
+
+/// One block: gather the signals into `buf` (lane-major, odd extension of `edge` samples at
+/// both ends, unused lanes zero), filter, scatter. Returns false if an input value was NaN or
+/// infinite (the output is then meaningless and the caller reports an error).
+///
+/// SAFETY (caller): no other thread writes the block's signals.
+#[inline(always)]
+unsafe fn block_job<const W: usize, const FMA: bool>(
+    sections: &[Section],
+    job: &Job,
     buf: &mut Vec<[f64; W]>,
-) {
-    debug_assert!(bases.len() <= W && len > edge);
-    buf.clear();
-    buf.resize(len + 2 * edge, [0.0; W]);
-    for t in 0..len {
-        let row = &mut buf[edge + t];
-        for (l, &b) in bases.iter().enumerate() {
-            row[l] = src[b + t * stride];
+) -> bool {
+    let (k, len, edge) = (job.bases.len(), job.len, job.edge);
+    assert!(k <= W);
+    if buf.len() != len + 2 * edge {
+        buf.clear();
+        buf.resize(len + 2 * edge, [0.0; W]);
+    }
+    if k < W {
+        for row in buf.iter_mut() {
+            row[k..].fill(0.0);
+        }
+    }
+    let run = run_length(job.bases);
+    let body = &mut buf[edge..edge + len];
+    match run {
+        2 => gather_runs::<W, 2>(body, job),
+        3 => gather_runs::<W, 3>(body, job),
+        4 => gather_runs::<W, 4>(body, job),
+        6 => gather_runs::<W, 6>(body, job),
+        8 => gather_runs::<W, 8>(body, job),
+        _ => gather_lanes::<W>(body, job),
+    }
+    let mut bad = false;
+    for row in body.iter() {
+        for v in row {
+            bad |= !v.is_finite();
         }
     }
     for i in 0..edge {
@@ -306,25 +444,70 @@ fn do_block<const W: usize>(
             buf[edge + len + i][l] = 2.0 * last[l] - mirror[l];
         }
     }
-    run_block::<W, FUSED>(level, sections, buf);
-    for (l, &b) in bases.iter().enumerate() {
-        assert!(b + (len - 1) * stride < out_len);
-        for t in 0..len {
-            // SAFETY: in bounds (checked above); no other block writes this signal's samples.
-            unsafe { *out.0.add(b + t * stride) = buf[edge + t][l] };
+    filtfilt_block::<W, FMA, FUSED>(sections, buf);
+    let body = &buf[edge..edge + len];
+    // SAFETY: exclusive by this function's contract.
+    unsafe {
+        match run {
+            2 => scatter_runs::<W, 2>(body, job),
+            3 => scatter_runs::<W, 3>(body, job),
+            4 => scatter_runs::<W, 4>(body, job),
+            6 => scatter_runs::<W, 6>(body, job),
+            8 => scatter_runs::<W, 8>(body, job),
+            _ => scatter_lanes::<W>(body, job),
+        }
+    }
+    !bad
+}
+
+unsafe fn job_portable<const W: usize>(s: &[Section], job: &Job, buf: &mut Vec<[f64; W]>) -> bool {
+    // SAFETY: forwarded contract.
+    unsafe { block_job::<W, false>(s, job, buf) }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn job_avx2<const W: usize>(s: &[Section], job: &Job, buf: &mut Vec<[f64; W]>) -> bool {
+    // SAFETY: forwarded contract.
+    unsafe { block_job::<W, true>(s, job, buf) }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+unsafe fn job_avx512<const W: usize>(s: &[Section], job: &Job, buf: &mut Vec<[f64; W]>) -> bool {
+    // SAFETY: forwarded contract.
+    unsafe { block_job::<W, true>(s, job, buf) }
+}
+
+/// SAFETY (caller): `level` is available and no other thread writes the block's signals.
+unsafe fn run_job<const W: usize>(
+    level: Level,
+    s: &[Section],
+    job: &Job,
+    buf: &mut Vec<[f64; W]>,
+) -> bool {
+    // SAFETY: forwarded contract (the CPU features by `Level::available`).
+    unsafe {
+        match level {
+            Level::Portable => job_portable::<W>(s, job, buf),
+            #[cfg(target_arch = "x86_64")]
+            Level::Avx2 => job_avx2::<W>(s, job, buf),
+            #[cfg(target_arch = "x86_64")]
+            Level::Avx512 => job_avx512::<W>(s, job, buf),
         }
     }
 }
 
 /// Filters every signal of every group (forward-backward, odd extension of `edge` samples,
-/// `sosfilt_zi` initial conditions) from `src` into the same positions of `dst`.
+/// `sosfilt_zi` initial conditions) from `src` into the same positions of `dst`. Returns false
+/// if any input value was NaN or infinite (`dst` is then meaningless).
 pub fn filtfilt_groups(
     sections: &[Section],
     src: &[f64],
     dst: &mut [f64],
     groups: &[SignalGroup],
     edge: usize,
-) {
+) -> bool {
     filtfilt_groups_at(Level::detect(), sections, src, dst, groups, edge)
 }
 
@@ -336,7 +519,7 @@ pub fn filtfilt_groups_at(
     dst: &mut [f64],
     groups: &[SignalGroup],
     edge: usize,
-) {
+) -> bool {
     assert!(src.len() == dst.len());
     assert!(
         Level::available().contains(&level),
@@ -373,47 +556,66 @@ fn run_groups<const W: usize>(
     dst: &mut [f64],
     groups: &[SignalGroup],
     edge: usize,
-) {
+) -> bool {
     // Blocks: (group, first signal, number of signals).
     let mut blocks: Vec<(usize, usize, usize)> = Vec::new();
     for (g, group) in groups.iter().enumerate() {
-        assert!(group.len > edge && group.len >= 1);
-        for b in group.bases {
-            assert!(b + (group.len - 1) * group.stride < src.len());
-        }
         let n = group.bases.len();
+        // Keep the channels of one trial (`stride` adjacent signals) in one block.
+        let chunk = if group.stride > 1 && group.stride <= W {
+            W / group.stride * group.stride
+        } else {
+            W
+        };
         let mut j = 0;
         while j < n {
-            let k = (n - j).min(W);
+            let k = (n - j).min(chunk);
             blocks.push((g, j, k));
             j += k;
         }
     }
+    // Signals must not overlap (each position is written by one block only).
+    debug_assert!({
+        let mut all: Vec<usize> = groups
+            .iter()
+            .flat_map(|g| {
+                g.bases
+                    .iter()
+                    .flat_map(move |&b| (0..g.len).map(move |t| b + t * g.stride))
+            })
+            .collect();
+        all.sort_unstable();
+        all.windows(2).all(|w| w[0] != w[1])
+    });
     let out = OutPtr(dst.as_mut_ptr());
     let out_len = dst.len();
-    blocks.par_iter().for_each_init(
-        || {
-            (
-                Vec::<[f64; W]>::new(),
-                Vec::<[f64; SMALL_LANES]>::new(),
-                Vec::<[f64; 1]>::new(),
-            )
-        },
-        |(big, small, one), &(g, j, k)| {
-            let group = &groups[g];
-            let bases = &group.bases[j..j + k];
-            let (stride, len) = (group.stride, group.len);
-            if k == 1 {
-                do_block::<1>(level, sections, src, out, out_len, bases, stride, len, edge, one);
-            } else if k <= SMALL_LANES {
-                do_block::<SMALL_LANES>(
-                    level, sections, src, out, out_len, bases, stride, len, edge, small,
-                );
-            } else {
-                do_block::<W>(level, sections, src, out, out_len, bases, stride, len, edge, big);
-            }
-        },
-    );
+    blocks
+        .par_iter()
+        .map_init(
+            || {
+                (
+                    Vec::<[f64; W]>::new(),
+                    Vec::<[f64; SMALL_LANES]>::new(),
+                    Vec::<[f64; 1]>::new(),
+                )
+            },
+            |(big, small, one), &(g, j, k)| {
+                let group = &groups[g];
+                let bases = &group.bases[j..j + k];
+                let job = Job::new(src, out, out_len, bases, group.stride, group.len, edge);
+                // SAFETY: `level` was checked above; blocks hold disjoint signals.
+                unsafe {
+                    if k == 1 {
+                        run_job::<1>(level, sections, &job, one)
+                    } else if k <= SMALL_LANES {
+                        run_job::<SMALL_LANES>(level, sections, &job, small)
+                    } else {
+                        run_job::<W>(level, sections, &job, big)
+                    }
+                }
+            },
+        )
+        .reduce(|| true, |a, b| a && b)
 }
 
 #[cfg(test)]

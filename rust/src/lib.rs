@@ -5,6 +5,7 @@
 
 pub mod error;
 
+pub mod buffer;
 pub mod checks;
 pub mod filter;
 pub mod lanes;
@@ -16,6 +17,7 @@ pub mod covariance;
 pub mod eigh;
 pub mod kmeans;
 pub mod kmeanspp;
+mod lloyd;
 pub mod sqdist;
 
 pub use error::{Error, Result};

@@ -76,7 +76,7 @@ pub fn resample_segments(
     check(values, channels, starts, ends, n)?;
     let frames = values.len() / channels;
     let row = channels * n;
-    let mut out = vec![0.0; starts.len() * row];
+    let mut out = crate::buffer::zeroed_f64(starts.len() * row);
     out.par_chunks_mut(row * SEGMENTS_PER_TASK)
         .enumerate()
         .for_each(|(k, chunk)| {

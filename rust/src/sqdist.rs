@@ -200,6 +200,28 @@ pub fn sq_dist(a: &[f64], b: &[f64]) -> f64 {
     s
 }
 
+/// Index of the smallest value of `v` (the first one on ties), that value, and the smallest of
+/// the other values (`+inf` when `v` has one value). `v` must not be empty; NaN is not
+/// expected (distances of finite data).
+pub fn two_nearest(v: &[f64]) -> (usize, f64, f64) {
+    assert!(!v.is_empty());
+    #[cfg(target_arch = "x86_64")]
+    if v.len() >= 8 && detected_level() == Level::Avx512 {
+        return unsafe { x86::two_nearest512(v) };
+    }
+    let (mut best, mut b, mut second) = (0, v[0], f64::INFINITY);
+    for (j, &x) in v.iter().enumerate().skip(1) {
+        if x < b {
+            second = b;
+            b = x;
+            best = j;
+        } else if x < second {
+            second = x;
+        }
+    }
+    (best, b, second)
+}
+
 /// Run `tile` on blocks of `P` row pointers; a short last block repeats its first row and
 /// writes through a scratch buffer.
 fn blocked<const P: usize>(
@@ -209,7 +231,16 @@ fn blocked<const P: usize>(
     tile: impl Fn(&[*const f64; P], *mut f64),
 ) {
     let full = rows.len() / P;
+    // Rows are often gathered from scattered places: prefetch a few blocks ahead.
+    static AH: OnceLock<usize> = OnceLock::new();
+    let ahead: usize = *AH.get_or_init(|| std::env::var("AHEAD").ok().and_then(|v| v.parse().ok()).unwrap_or(4));
+    for r in rows.iter().take(ahead * P) {
+        prefetch_row(r);
+    }
     for b in 0..full {
+        for r in rows.iter().skip((b + ahead) * P).take(P) {
+            prefetch_row(r);
+        }
         let ptrs: [*const f64; P] = std::array::from_fn(|p| rows[b * P + p].as_ptr());
         tile(&ptrs, out[b * P * kpad..(b + 1) * P * kpad].as_mut_ptr());
     }
@@ -221,6 +252,27 @@ fn blocked<const P: usize>(
         let mut scratch = vec![0.0; P * kpad];
         tile(&ptrs, scratch.as_mut_ptr());
         out[base * kpad..(base + rest) * kpad].copy_from_slice(&scratch[..rest * kpad]);
+    }
+}
+
+/// Hint the CPU to load a row into cache.
+#[inline(always)]
+pub fn prefetch_row(row: &[f64]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        let p = row.as_ptr() as *const i8;
+        let bytes = std::mem::size_of_val(row);
+        let mut off = 0;
+        while off < bytes {
+            // SAFETY: prefetching is a hint and never faults; the address is inside `row`.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add(off)) };
+            off += 64;
+        }
+        // The last line, when the row is not 64-byte aligned.
+        if bytes > 0 {
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add(bytes - 1)) };
+        }
     }
 }
 
@@ -305,6 +357,48 @@ mod x86 {
         _mm256_sub_pd,
         _mm256_fmadd_pd
     );
+
+    /// Lane-wise best/second/index over full vectors, then a cross-lane merge and a scalar
+    /// tail; same result as the sequential scan.
+    ///
+    /// # Safety
+    /// AVX-512F available; `v.len() ≥ 8`.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn two_nearest512(v: &[f64]) -> (usize, f64, f64) {
+        let len = v.len();
+        let p = v.as_ptr();
+        let inf = _mm512_set1_pd(f64::INFINITY);
+        let mut best = _mm512_loadu_pd(p);
+        let mut second = inf;
+        let mut idx = _mm512_set_epi64(7, 6, 5, 4, 3, 2, 1, 0);
+        let step = _mm512_set1_epi64(8);
+        let mut cur = idx;
+        let mut j = 8;
+        while j < len {
+            cur = _mm512_add_epi64(cur, step);
+            let x = if j + 8 <= len {
+                _mm512_loadu_pd(p.add(j))
+            } else {
+                // Tail: missing lanes read as +inf.
+                let m: __mmask8 = (1u8 << (len - j)) - 1;
+                _mm512_mask_loadu_pd(inf, m, p.add(j))
+            };
+            let lt = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(x, best);
+            second = _mm512_min_pd(second, _mm512_max_pd(x, best));
+            best = _mm512_min_pd(best, x);
+            idx = _mm512_mask_mov_epi64(idx, lt, cur);
+            j += 8;
+        }
+        // Cross-lane: smallest value, lowest index among the lanes holding it; the second
+        // value is the smallest of the lanes' seconds and of the other lanes' bests.
+        let bmin = _mm512_reduce_min_pd(best);
+        let at_min = _mm512_cmp_pd_mask::<_CMP_EQ_OQ>(best, _mm512_set1_pd(bmin));
+        let imin = _mm512_reduce_min_epi64(_mm512_mask_mov_epi64(_mm512_set1_epi64(i64::MAX), at_min, idx));
+        let lane = _mm512_cmpeq_epi64_mask(idx, _mm512_set1_epi64(imin)) & at_min;
+        let others = _mm512_mask_mov_pd(best, lane, inf);
+        let sec = _mm512_reduce_min_pd(_mm512_min_pd(second, others));
+        return (imin as usize, bmin, sec);
+    }
 
     /// # Safety
     /// AVX-512F available; `a`, `b` readable for `d` values.
@@ -404,6 +498,27 @@ mod tests {
                     let direct = sq_dist(&x[i * d..(i + 1) * d], &c[..d]);
                     assert!((direct - out[i * kp]).abs() <= 1e-12 * direct.max(1.0));
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn two_nearest_matches_a_sequential_scan() {
+        let reference = |v: &[f64]| {
+            let mut best = 0;
+            for j in 1..v.len() {
+                if v[j] < v[best] {
+                    best = j;
+                }
+            }
+            let second = (0..v.len()).filter(|&j| j != best).map(|j| v[j]).fold(f64::INFINITY, f64::min);
+            (best, v[best], second)
+        };
+        for len in [1usize, 2, 7, 8, 9, 16, 17, 33, 176] {
+            for seed in 0..20u64 {
+                // Few distinct values: many ties, including ties for the minimum.
+                let v: Vec<f64> = values(len, seed * 31 + len as u64).iter().map(|x| (x * 3.0).round()).collect();
+                assert_eq!(two_nearest(&v), reference(&v), "{v:?}");
             }
         }
     }

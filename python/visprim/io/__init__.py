@@ -72,6 +72,17 @@ __all__ = [
 
 #: Supported extensions (lower case) → format name.
 FORMATS: dict[str, str] = {".bvh": "bvh", ".amc": "amc", ".c3d": "c3d", ".csv": "csv"}
+#: Options that only apply to some formats (the marker CSV is already an arm trial in the
+#: common frame). read() refuses them for other files; read_many() passes them only there.
+_FORMAT_OPTIONS: dict[str, tuple[str, ...]] = {
+    "skeleton": ("amc",),
+    "rate": ("amc",),
+    "units": ("bvh",),
+    "mapping": ("bvh", "amc", "c3d"),
+    "preset": ("bvh", "amc", "c3d"),
+    "up_axis": ("bvh", "amc", "c3d"),
+    "mirror": ("bvh", "amc", "c3d"),
+}
 
 _BANDAI = re.compile(
     r"^dataset-(?P<dataset>\d+)_(?P<content>[a-z0-9-]+)_(?P<style>[a-z]+)_(?P<take>\d+)$"
@@ -166,11 +177,17 @@ def read_pieces(
         raise ReadError(p, "no such file" if not p.exists() else "not a regular file")
     if up_axis is not None:
         check_up_axis(up_axis)
-    for name, value, formats in (
-        ("skeleton", skeleton, ("amc",)),
-        ("rate", rate, ("amc",)),
-        ("units", units, ("bvh",)),
-    ):
+    given = {
+        "skeleton": skeleton,
+        "rate": rate,
+        "units": units,
+        "mapping": mapping,
+        "preset": preset,
+        "up_axis": up_axis,
+        "mirror": mirror or None,
+    }
+    for name, value in given.items():
+        formats = _FORMAT_OPTIONS[name]
         if value is not None and fmt not in formats:
             raise ValueError(f"{name}= applies to {'/'.join(formats)} files, not {p.name}")
     if markers not in ("virtual", "file"):
@@ -181,8 +198,6 @@ def read_pieces(
         raise ValueError(f"repetitions must be >= 1, got {repetitions!r}")
 
     if fmt == "csv":
-        if mirror:
-            raise ValueError("mirror=True is not supported for the marker CSV (one right arm)")
         trials = [_read_csv(p, arm, repetitions)]
     else:
         recs = _read_arm(
@@ -235,13 +250,47 @@ def read_pieces(
     return trials
 
 
-def read(path: str | os.PathLike[str], arm: str = "right", **options: Any) -> Trial:
+def read(
+    path: str | os.PathLike[str],
+    arm: str = "right",
+    *,
+    skeleton: str | os.PathLike[str] | None = None,
+    rate: float | None = None,
+    mapping: Mapping[str, str | Sequence[str]] | None = None,
+    preset: str | None = None,
+    up_axis: str | None = None,
+    units: str | float | None = None,
+    markers: str = "virtual",
+    max_gap: float = 0.2,
+    on_gap: str = "split",
+    gap_method: str = "cubic",
+    min_duration: float = 0.5,
+    resample: float | None = None,
+    repetitions: int | None = None,
+    mirror: bool = False,
+) -> Trial:
     """Read one recording as one :class:`~visprim.trial.Trial`.
 
-    Takes the options of :func:`read_pieces`. If long gaps split the recording into several
-    pieces, raises :class:`GapError` (use :func:`read_pieces` / :func:`read_many` for all
-    pieces, or ``on_gap="longest"``).
+    The options are those of :func:`read_pieces`. If long gaps split the recording into
+    several pieces, raises :class:`GapError` (use :func:`read_pieces` / :func:`read_many`
+    for all pieces, or ``on_gap="longest"``).
     """
+    options: dict[str, Any] = {
+        "skeleton": skeleton,
+        "rate": rate,
+        "mapping": mapping,
+        "preset": preset,
+        "up_axis": up_axis,
+        "units": units,
+        "markers": markers,
+        "max_gap": max_gap,
+        "on_gap": on_gap,
+        "gap_method": gap_method,
+        "min_duration": min_duration,
+        "resample": resample,
+        "repetitions": repetitions,
+        "mirror": mirror,
+    }
     trials = read_pieces(path, arm, **options)
     if len(trials) > 1:
         spans = ", ".join(f"{t.times[0]:.2f}–{t.times[-1]:.2f} s" for t in trials)
@@ -251,9 +300,6 @@ def read(path: str | os.PathLike[str], arm: str = "right", **options: Any) -> Tr
             "read_pieces() or read_many() to get them all, or on_gap='longest'",
         )
     return trials[0]
-
-
-_FORMAT_OPTIONS = {"skeleton": "amc", "rate": "amc", "units": "bvh"}
 
 
 def _expand(
@@ -307,8 +353,10 @@ def read_many(
     ``recursive=False`` (sorted; other files such as README.md, .asf skeletons and licences
     are skipped);
     patterns are expanded with :func:`glob.glob`. Recordings split by long gaps contribute
-    every piece. Options are those of :func:`read_pieces`; format-specific ones (``skeleton``,
-    ``rate`` for AMC, ``units`` for BVH) are only passed to files of that format.
+    every piece. Options are those of :func:`read_pieces`; format-specific ones (``skeleton``
+    and ``rate`` for AMC, ``units`` for BVH, ``mapping``, ``preset``, ``up_axis`` and
+    ``mirror`` for the motion-capture formats, not the marker CSV) are only passed to files of
+    those formats.
     ``on_error="warn"`` skips unreadable files with a warning instead of raising.
     """
     if on_error not in ("raise", "warn"):
@@ -319,7 +367,7 @@ def read_many(
         opts = {
             k: v
             for k, v in options.items()
-            if k not in _FORMAT_OPTIONS or _FORMAT_OPTIONS[k] == fmt
+            if k not in _FORMAT_OPTIONS or fmt in _FORMAT_OPTIONS[k]
         }
         try:
             trials.extend(read_pieces(path, arm, **opts))
@@ -385,7 +433,8 @@ def _read_csv(p: Path, arm: str, repetitions: int | None) -> Trial:
         return read_marker_csv(p, repetitions=repetitions)
     except ReadError:
         raise
-    except ValueError as exc:
+    except ValueError as exc:  # MarkerCSVError: "<path>: ..." or "<path>, line N: ..."
         msg = str(exc)
-        prefix = f"{p}: "
-        raise MalformedFileError(p, msg[len(prefix) :] if msg.startswith(prefix) else msg) from exc
+        if msg.startswith(str(p)):
+            msg = msg[len(str(p)) :].lstrip(":, ")
+        raise MalformedFileError(p, msg) from exc

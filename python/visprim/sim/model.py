@@ -22,7 +22,7 @@ segment masses from the shapes at :data:`DENSITY` land near Winter's mass fracti
 75 kg adult (Winter, *Biomechanics and Motor Control of Human Movement*, table 4.1: upper arm
 0.028, forearm 0.016, hand 0.006, head and neck 0.081, thorax + abdomen 0.355 of body mass).
 The resulting masses are listed by :func:`link_masses` (torso ≈ 26 kg, head ≈ 5 kg,
-upper arm ≈ 2.1 kg, forearm ≈ 1.2 kg, hand ≈ 0.5 kg; ≈ 38 kg moving in all).
+upper arm ≈ 2.1 kg, forearm ≈ 1.2 kg, hand ≈ 0.5 kg; ≈ 39 kg moving in all).
 
 Mass, centre of mass and inertia of each body are computed from its shapes
 (:func:`composite_inertia`: the shapes' own inertias about their centres, moved to the common

@@ -23,7 +23,7 @@ joint's angular velocity), not a difference of coordinates.
 Gains (:data:`GAINS`, per joint; the same for every axis of a ball joint): ``kp`` in N·m/rad,
 ``kd`` in N·m·s/rad, chosen near critical damping ``kd ≈ 2 sqrt(kp I)`` with ``I`` the
 inertia the joint moves (straight arm, upright body). The natural frequencies ``sqrt(kp/I)``
-are 20–60 rad/s, well above the 1–3 Hz content of arm movements, and stiff enough that
+are 20–80 rad/s, well above the 1–3 Hz content of arm movements, and stiff enough that
 gravity on the outstretched arm (≈ 11 N·m) deflects the shoulder by about 1°.
 
 ======== ======= ========= ================================ ==============
@@ -32,8 +32,8 @@ joint    kp      kd        moved inertia I (kg·m²)          sqrt(kp/I)
 waist    2000    200       ≈ 5 (torso, head, arms)          ≈ 20 rad/s
 neck     150     10        ≈ 0.16 (head)                    ≈ 31 rad/s
 shoulder 600     35        ≈ 0.51 (straight arm)            ≈ 34 rad/s
-elbow    150     7.5       ≈ 0.095 (forearm and hand)       ≈ 40 rad/s
-wrist    20      0.7       ≈ 0.0062 (hand, transverse)      ≈ 57 rad/s
+elbow    250     10        ≈ 0.095 (forearm and hand)       ≈ 51 rad/s
+wrist    40      1.0       ≈ 0.0062 (hand, transverse)      ≈ 80 rad/s
 ======== ======= ========= ================================ ==============
 """
 

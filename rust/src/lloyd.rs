@@ -1,0 +1,535 @@
+//! Lloyd iterations with exact pruning (the engine behind [`crate::kmeans`]).
+//!
+//! Each row keeps an upper bound `u` on the distance to its centre and a lower bound `l` on
+//! the distance to every other centre, both *anchored* at the iteration `t` where they were
+//! last computed: at iteration `now` they are loosened by the net displacement of the centres
+//! since `t` (`‖c(now) - c(t)‖`, Newling & Fleuret's "ns" bounds), not by the sum of every
+//! step's displacement. A row is left alone when `u < max(l, s_a)` (`s_a`: half the distance
+//! from its centre to the nearest other centre, Hamerly's test); otherwise `u` is recomputed
+//! and, if the test still fails, the row is compared with the centres lying within `2u` of
+//! its own centre (the others are provably farther), in batches of rows that share a centre
+//! so the SIMD distance kernel runs on full tiles. Every pruning decision keeps a safety margin
+//! of `1e-11 ×` the data diameter, so the labels equal those of brute-force Lloyd except for
+//! rows whose two nearest centres are tied within that margin.
+//!
+//! The M-step updates per-cluster sums incrementally with the rows whose label changed
+//! (compensated with TwoSum, so their error stays at the level of a freshly computed sum), in a
+//! fixed order: results do not depend on the number of threads.
+
+use rayon::prelude::*;
+
+use crate::sqdist::{sq_dist, sq_dists, two_nearest, Panel};
+
+pub static DBG_SCAN: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+/// Rows per parallel task of the bound tests.
+const CHUNK: usize = 2048;
+/// Rows per distance-kernel call.
+const GROUP: usize = 64;
+/// Number of past iterations a bound may stay anchored to before it is re-anchored.
+const WINDOW: usize = 24;
+/// Memory allowed for the per-chunk partial sums of the first M-step.
+const PARTIAL_BYTES: usize = 128 << 20;
+/// Pruning margin, relative to the data diameter.
+const MARGIN: f64 = 1e-11;
+
+/// Result of one Lloyd run.
+pub(crate) struct LloydRun {
+    pub centers: Vec<f64>,
+    pub labels: Vec<u32>,
+    pub inertia: f64,
+    pub n_iter: usize,
+}
+
+/// Run Lloyd from `init` (row-major `k × d`); `tol_abs` is the absolute tolerance on the total
+/// squared centre shift, `diameter` bounds the distances (for the pruning margin).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn lloyd(
+    x: &[f64],
+    n: usize,
+    d: usize,
+    init: &[f64],
+    k: usize,
+    max_iter: usize,
+    tol_abs: f64,
+    diameter: f64,
+) -> LloydRun {
+    let mut st = State::new(x, n, d, k, init, MARGIN * diameter);
+    let mut strict = false;
+    let mut n_iter = 0;
+    for it in 0..max_iter {
+        n_iter = it + 1;
+        let t0 = std::time::Instant::now();
+        let changes = st.e_step();
+        let t1 = t0.elapsed();
+        let shift = st.m_step(&changes);
+        if std::env::var("KDBG").is_ok() { eprintln!("it {it} changes {} scan {} e {:?} m {:?}", changes.len(), DBG_SCAN.swap(0, std::sync::atomic::Ordering::Relaxed), t1, t0.elapsed() - t1); }
+        if it > 0 && changes.is_empty() {
+            strict = true;
+            break;
+        }
+        if shift <= tol_abs {
+            break;
+        }
+    }
+    if !strict {
+        st.e_step();
+    }
+    let inertia = st.inertia();
+    LloydRun { centers: st.centers, labels: st.labels, inertia, n_iter }
+}
+
+/// A label change `(row, old, new)`.
+type Change = (u32, u32, u32);
+
+struct State<'a> {
+    x: &'a [f64],
+    n: usize,
+    d: usize,
+    k: usize,
+    slack: f64,
+    /// Compare failing rows with every centre (few centres) instead of the restricted scan.
+    direct: bool,
+    /// Index of the next E-step (its centres are `centers`).
+    now: usize,
+    centers: Vec<f64>,
+    panel: Panel,
+    /// Centres of the last `WINDOW + 1` E-steps, ring-indexed by E-step.
+    hist: Vec<Vec<f64>>,
+    labels: Vec<u32>,
+    upper: Vec<f64>,
+    t_upper: Vec<u32>,
+    lower: Vec<f64>,
+    t_lower: Vec<u32>,
+    /// Per-cluster coordinate sums (with Neumaier compensation) and counts.
+    sums: Vec<f64>,
+    comp: Vec<f64>,
+    counts: Vec<u64>,
+}
+
+impl<'a> State<'a> {
+    fn new(x: &'a [f64], n: usize, d: usize, k: usize, init: &[f64], slack: f64) -> Self {
+        let mut hist = vec![Vec::new(); WINDOW + 1];
+        hist[0] = init.to_vec();
+        Self {
+            x,
+            n,
+            d,
+            k,
+            slack,
+            direct: match std::env::var("KDIRECT") { Ok(v) => v == "1", Err(_) => Panel::from_centers(init, k, d).kpad() <= 32 },
+            now: 0,
+            centers: init.to_vec(),
+            panel: Panel::from_centers(init, k, d),
+            hist,
+            labels: vec![0; n],
+            upper: vec![0.0; n],
+            t_upper: vec![0; n],
+            lower: vec![0.0; n],
+            t_lower: vec![0; n],
+            sums: vec![0.0; k * d],
+            comp: vec![0.0; k * d],
+            counts: vec![0; k],
+        }
+    }
+
+    fn row(&self, i: usize) -> &'a [f64] {
+        &self.x[i * self.d..(i + 1) * self.d]
+    }
+
+    /// Assign every row to its nearest centre; returns the label changes in a fixed order.
+    fn e_step(&mut self) -> Vec<Change> {
+        let changes = if self.now == 0 { self.full_scan() } else { self.pruned_scan() };
+        self.now += 1;
+        changes
+    }
+
+    /// First E-step: every row against every centre.
+    fn full_scan(&mut self) -> Vec<Change> {
+        let (x, d, k) = (self.x, self.d, self.k);
+        let panel = &self.panel;
+        self.labels
+            .par_chunks_mut(CHUNK)
+            .zip(self.upper.par_chunks_mut(CHUNK))
+            .zip(self.lower.par_chunks_mut(CHUNK))
+            .enumerate()
+            .for_each(|(b, ((lab, up), lo))| {
+                let kp = panel.kpad();
+                let mut buf = vec![0.0; GROUP * kp];
+                for g in 0..lab.len().div_ceil(GROUP) {
+                    let (s, e) = (g * GROUP, ((g + 1) * GROUP).min(lab.len()));
+                    let base = b * CHUNK;
+                    let rows: Vec<&[f64]> =
+                        (base + s..base + e).map(|i| &x[i * d..(i + 1) * d]).collect();
+                    sq_dists(&rows, panel, &mut buf);
+                    for r in 0..e - s {
+                        let (best, bd, sd) = two_nearest(&buf[r * kp..r * kp + k]);
+                        lab[s + r] = best as u32;
+                        up[s + r] = bd.sqrt();
+                        lo[s + r] = sd.sqrt();
+                    }
+                }
+            });
+        self.t_upper.fill(0);
+        self.t_lower.fill(0);
+        // Every row gets its first label: report it as a change from "none" (u32::MAX).
+        (0..self.n as u32).map(|i| (i, u32::MAX, self.labels[i as usize])).collect()
+    }
+
+    /// Later E-steps: bound tests, then batched scans of the rows that fail them.
+    fn pruned_scan(&mut self) -> Vec<Change> {
+        let (d, k, now, slack) = (self.d, self.k, self.now, self.slack);
+        // Net displacement of every centre since each anchor still in the window, with the
+        // largest and second largest per anchor (for the lower bounds).
+        let lo_t = now.saturating_sub(WINDOW - 1);
+        let span = now - lo_t;
+        let mut disp = vec![0.0; span * k];
+        let mut dmax = vec![(0.0f64, usize::MAX, 0.0f64); span];
+        for t in lo_t..now {
+            let old = &self.hist[t % (WINDOW + 1)];
+            let row = &mut disp[(t - lo_t) * k..(t - lo_t + 1) * k];
+            let (mut m1, mut a1, mut m2) = (0.0f64, usize::MAX, 0.0f64);
+            for j in 0..k {
+                let p = sq_dist(&self.centers[j * d..(j + 1) * d], &old[j * d..(j + 1) * d]).sqrt();
+                row[j] = p;
+                if p > m1 {
+                    m2 = m1;
+                    m1 = p;
+                    a1 = j;
+                } else if p > m2 {
+                    m2 = p;
+                }
+            }
+            dmax[t - lo_t] = (m1, a1, m2);
+        }
+        let half = self.half_separation();
+
+        // Phase 1: tests (and tightening of u) in parallel over fixed chunks. With few
+        // centres the rows that fail are compared with all of them right away; otherwise
+        // they are collected for the batched, restricted scan below.
+        let x = self.x;
+        let centers = &self.centers;
+        let panel = &self.panel;
+        let direct = self.direct;
+        let phase1: Vec<(Vec<u32>, Vec<Change>)> = self
+            .labels
+            .par_chunks_mut(CHUNK)
+            .zip(self.upper.par_chunks_mut(CHUNK))
+            .zip(self.t_upper.par_chunks_mut(CHUNK))
+            .zip(self.lower.par_chunks_mut(CHUNK))
+            .zip(self.t_lower.par_chunks_mut(CHUNK))
+            .enumerate()
+            .map(|(b, ((((lab, up), tu), lo), tl))| {
+                let mut scan = Vec::new();
+                for i in 0..lab.len() {
+                    let a = lab[i] as usize;
+                    let (ta, tb) = (tu[i] as usize, tl[i] as usize);
+                    let ub = if ta == now { up[i] } else { up[i] + disp[(ta - lo_t) * k + a] };
+                    let lb = if tb == now {
+                        lo[i]
+                    } else {
+                        let (m1, a1, m2) = dmax[tb - lo_t];
+                        lo[i] - if a == a1 { m2 } else { m1 }
+                    };
+                    let m = half[a].max(lb);
+                    let mut tightened = false;
+                    if ub + slack >= m && direct {
+                        scan.push(i as u32);
+                        continue;
+                    }
+                    if ub + slack >= m {
+                        let row = &x[(b * CHUNK + i) * d..(b * CHUNK + i + 1) * d];
+                        let u = sq_dist(row, &centers[a * d..(a + 1) * d]).sqrt();
+                        up[i] = u;
+                        tu[i] = now as u32;
+                        if u + slack >= m {
+                            scan.push(i as u32);
+                            continue;
+                        }
+                        tightened = true;
+                    }
+                    // Kept: move anchors about to leave the window to `now`.
+                    if span == WINDOW - 1 {
+                        if !tightened && ta == lo_t {
+                            up[i] = ub;
+                            tu[i] = now as u32;
+                        }
+                        if tb == lo_t {
+                            lo[i] = lb;
+                            tl[i] = now as u32;
+                        }
+                    }
+                }
+                let mut changes = Vec::new();
+                DBG_SCAN.fetch_add(scan.len(), std::sync::atomic::Ordering::Relaxed);
+                if direct && !scan.is_empty() {
+                    let kp = panel.kpad();
+                    let mut buf = vec![0.0; GROUP.min(scan.len()) * kp];
+                    for grp in scan.chunks(GROUP) {
+                        let rows: Vec<&[f64]> = grp
+                            .iter()
+                            .map(|&i| &x[(b * CHUNK + i as usize) * d..(b * CHUNK + i as usize + 1) * d])
+                            .collect();
+                        sq_dists(&rows, panel, &mut buf);
+                        for (r, &i) in grp.iter().enumerate() {
+                            let i = i as usize;
+                            let (best, bd, sd) = two_nearest(&buf[r * kp..r * kp + k]);
+                            if best as u32 != lab[i] {
+                                changes.push(((b * CHUNK + i) as u32, lab[i], best as u32));
+                                lab[i] = best as u32;
+                            }
+                            up[i] = bd.sqrt();
+                            lo[i] = sd.sqrt();
+                            tu[i] = now as u32;
+                            tl[i] = now as u32;
+                        }
+                    }
+                    scan.clear();
+                }
+                for i in scan.iter_mut() {
+                    *i += (b * CHUNK) as u32;
+                }
+                (scan, changes)
+            })
+            .collect();
+        if direct {
+            return phase1.into_iter().flat_map(|(_, c)| c).collect();
+        }
+        let scans: Vec<Vec<u32>> = phase1.into_iter().map(|(s, _)| s).collect();
+
+        // Phase 2: group the failing rows by centre, sort each group by u, and compare each
+        // batch with the centres within 2·max(u) of the group's centre.
+        let mut by_center: Vec<Vec<u32>> = vec![Vec::new(); k];
+        for &i in scans.iter().flatten() {
+            by_center[self.labels[i as usize] as usize].push(i);
+        }
+        let mut batches: Vec<(usize, Vec<u32>)> = Vec::new();
+        for (a, mut rows) in by_center.into_iter().enumerate() {
+            rows.sort_by(|&p, &q| {
+                self.upper[p as usize].total_cmp(&self.upper[q as usize]).then(p.cmp(&q))
+            });
+            for batch in rows.chunks(GROUP) {
+                batches.push((a, batch.to_vec()));
+            }
+        }
+        let results: Vec<Vec<(u32, u32, f64, f64)>> = batches
+            .par_iter()
+            .map(|(a, rows)| self.scan_batch(*a, rows))
+            .collect();
+
+        // Phase 3: write back, in batch order.
+        let mut changes = Vec::new();
+        for (i, label, u, l) in results.into_iter().flatten() {
+            let iu = i as usize;
+            let old = self.labels[iu];
+            if label != old {
+                changes.push((i, old, label));
+                self.labels[iu] = label;
+            }
+            self.upper[iu] = u;
+            self.lower[iu] = l;
+            self.t_upper[iu] = now as u32;
+            self.t_lower[iu] = now as u32;
+        }
+        changes
+    }
+
+    /// Rows `rows` (all labelled `a`, sorted by their exact distance `u` to centre `a`) against
+    /// the centres within `2·max(u)` of centre `a`. Returns `(row, label, u, l)`.
+    fn scan_batch(&self, a: usize, rows: &[u32]) -> Vec<(u32, u32, f64, f64)> {
+        let (d, k) = (self.d, self.k);
+        let umax = self.upper[*rows.last().expect("non-empty batch") as usize];
+        let radius = 2.0 * umax + 2.0 * self.slack;
+        let mut cc = vec![0.0; self.panel.kpad()];
+        sq_dists(&[&self.centers[a * d..(a + 1) * d]], &self.panel, &mut cc);
+        let mut cand = Vec::new();
+        let mut next = f64::INFINITY;
+        for (j, &v) in cc[..k].iter().enumerate() {
+            let dist = v.sqrt();
+            if dist <= radius || j == a {
+                cand.push(j);
+            } else {
+                next = next.min(dist);
+            }
+        }
+        let panel = Panel::from_rows(&self.centers, d, &cand);
+        let kp = panel.kpad();
+        let mut buf = vec![0.0; rows.len() * kp];
+        let rr: Vec<&[f64]> = rows.iter().map(|&i| self.row(i as usize)).collect();
+        sq_dists(&rr, &panel, &mut buf);
+        rows.iter()
+            .enumerate()
+            .map(|(r, &i)| {
+                let (best, bd, sd) = two_nearest(&buf[r * kp..r * kp + cand.len()]);
+                let u_old = self.upper[i as usize];
+                let l = sd.sqrt().min(next - u_old);
+                (i, cand[best] as u32, bd.sqrt(), l)
+            })
+            .collect()
+    }
+
+    /// `0.5 × min_{j' ≠ j} ‖c_j - c_j'‖` for every centre (`+inf` when k = 1).
+    fn half_separation(&self) -> Vec<f64> {
+        let (k, d) = (self.k, self.d);
+        let kp = self.panel.kpad();
+        (0..k)
+            .into_par_iter()
+            .with_min_len(16)
+            .map(|j| {
+                let mut buf = vec![0.0; kp];
+                sq_dists(&[&self.centers[j * d..(j + 1) * d]], &self.panel, &mut buf);
+                let m = buf[..k]
+                    .iter()
+                    .enumerate()
+                    .filter(|&(i, _)| i != j)
+                    .fold(f64::INFINITY, |m, (_, &v)| m.min(v));
+                0.5 * m.sqrt()
+            })
+            .collect()
+    }
+
+    /// Update the sums with the label changes, move the centres; returns `Σ_j ‖Δc_j‖²`.
+    fn m_step(&mut self, changes: &[Change]) -> f64 {
+        let (d, k) = (self.d, self.k);
+        if self.now == 1 {
+            self.fresh_sums();
+        } else {
+            for (c, &(i, old, new)) in changes.iter().enumerate() {
+                if let Some(&(ahead, _, _)) = changes.get(c + 8) {
+                    crate::sqdist::prefetch_row(self.row(ahead as usize));
+                }
+                let row = self.row(i as usize);
+                let (o, nw) = (old as usize, new as usize);
+                let (s_o, c_o) = (&mut self.sums[o * d..(o + 1) * d], &mut self.comp[o * d..(o + 1) * d]);
+                for ((s, c), &v) in s_o.iter_mut().zip(c_o.iter_mut()).zip(row) {
+                    two_sum(s, c, -v);
+                }
+                let (s_n, c_n) =
+                    (&mut self.sums[nw * d..(nw + 1) * d], &mut self.comp[nw * d..(nw + 1) * d]);
+                for ((s, c), &v) in s_n.iter_mut().zip(c_n.iter_mut()).zip(row) {
+                    two_sum(s, c, v);
+                }
+                self.counts[o] -= 1;
+                self.counts[nw] += 1;
+            }
+        }
+        // Totals used for this M-step (a copy: re-seeding empty clusters must not leak into
+        // the label-consistent running sums).
+        let mut totals: Vec<f64> = self.sums.iter().zip(&self.comp).map(|(s, c)| s + c).collect();
+        let mut counts = self.counts.clone();
+        if counts.contains(&0) {
+            self.relocate_empty(&mut totals, &mut counts);
+        }
+        let mut shift = 0.0;
+        for j in 0..k {
+            if counts[j] == 0 {
+                continue;
+            }
+            let alpha = 1.0 / counts[j] as f64;
+            let c = &mut self.centers[j * d..(j + 1) * d];
+            for t in 0..d {
+                let v = totals[j * d + t] * alpha;
+                shift += (v - c[t]) * (v - c[t]);
+                c[t] = v;
+            }
+        }
+        self.panel.set(&self.centers, k);
+        self.hist[self.now % (WINDOW + 1)] = self.centers.clone();
+        shift
+    }
+
+    /// Sums and counts from scratch (first M-step): per-chunk partials added in chunk order.
+    fn fresh_sums(&mut self) {
+        let (x, d, k, n) = (self.x, self.d, self.k, self.n);
+        let max_chunks = (PARTIAL_BYTES / (k * d * 8).max(1)).max(1);
+        let rows = CHUNK.max(n.div_ceil(max_chunks));
+        let parts: Vec<(Vec<f64>, Vec<u64>)> = self
+            .labels
+            .par_chunks(rows)
+            .enumerate()
+            .map(|(b, lab)| {
+                let mut s = vec![0.0; k * d];
+                let mut c = vec![0u64; k];
+                for (i, &l) in lab.iter().enumerate() {
+                    let l = l as usize;
+                    let r = &x[(b * rows + i) * d..(b * rows + i + 1) * d];
+                    s[l * d..(l + 1) * d].iter_mut().zip(r).for_each(|(a, v)| *a += v);
+                    c[l] += 1;
+                }
+                (s, c)
+            })
+            .collect();
+        self.sums.fill(0.0);
+        self.comp.fill(0.0);
+        self.counts.fill(0);
+        for (s, c) in &parts {
+            self.sums.iter_mut().zip(s).for_each(|(a, v)| *a += v);
+            self.counts.iter_mut().zip(c).for_each(|(a, v)| *a += v);
+        }
+    }
+
+    /// Re-seed empty clusters with the rows farthest from their own centre.
+    fn relocate_empty(&self, sums: &mut [f64], counts: &mut [u64]) {
+        let (x, d, n) = (self.x, self.d, self.n);
+        let dist: Vec<f64> = (0..n)
+            .into_par_iter()
+            .with_min_len(1024)
+            .map(|i| {
+                let a = self.labels[i] as usize;
+                sq_dist(&x[i * d..(i + 1) * d], &self.centers[a * d..(a + 1) * d])
+            })
+            .collect();
+        if dist.iter().all(|&v| v == 0.0) {
+            return;
+        }
+        let empty: Vec<usize> = (0..self.k).filter(|&j| counts[j] == 0).collect();
+        let mut order: Vec<usize> = (0..n).collect();
+        let cmp = |a: &usize, b: &usize| dist[*b].total_cmp(&dist[*a]).then(a.cmp(b));
+        let m = empty.len().min(n);
+        if m < n {
+            order.select_nth_unstable_by(m, cmp);
+        }
+        order.truncate(m);
+        order.sort_by(cmp);
+        for (&j, &far) in empty.iter().zip(&order) {
+            let old = self.labels[far] as usize;
+            let row = &x[far * d..(far + 1) * d];
+            for t in 0..d {
+                sums[old * d + t] -= row[t];
+                sums[j * d + t] = row[t];
+            }
+            counts[old] -= 1;
+            counts[j] = 1;
+        }
+    }
+
+    fn inertia(&self) -> f64 {
+        let (x, d) = (self.x, self.d);
+        let parts: Vec<f64> = self
+            .labels
+            .par_chunks(CHUNK)
+            .enumerate()
+            .map(|(b, lab)| {
+                let mut s = 0.0;
+                for (i, &l) in lab.iter().enumerate() {
+                    let r = b * CHUNK + i;
+                    let l = l as usize;
+                    for t in 0..d {
+                        let diff = x[r * d + t] - self.centers[l * d + t];
+                        s += diff * diff;
+                    }
+                }
+                s
+            })
+            .collect();
+        parts.iter().sum()
+    }
+}
+
+/// `s + c += y`, keeping the rounding error of `s + y` in `c` (Knuth's branch-free TwoSum).
+#[inline(always)]
+fn two_sum(s: &mut f64, c: &mut f64, y: f64) {
+    let t = *s + y;
+    let bp = t - *s;
+    *c += (*s - (t - bp)) + (y - bp);
+    *s = t;
+}
