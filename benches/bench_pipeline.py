@@ -23,17 +23,25 @@ PCA           ``covariance`` + ``eigh``              ``sklearn PCA(svd_solver="c
 k-means       ``kmeans``                             ``sklearn KMeans(algorithm="lloyd")``
 ============  =====================================  =========================================
 
+Threads: both sides use every core by default (rayon; OpenBLAS / OpenMP for scipy and
+scikit-learn). On a machine shared with other work the references' spinning thread pools
+suffer most; ``RAYON_NUM_THREADS=1 OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1`` gives a
+single-thread comparison that is far less sensitive to the load.
+
 The run checks that both pipelines find the same segments, nearly equal vectors and
-eigenvalues, and k-means inertias within 2 %, then records the median of 3 runs of each.
+eigenvalues, and k-means inertias within 2 %, then records the median of 5 runs of each
+(run alternately, so both see the same load on a shared machine).
 """
 
 from __future__ import annotations
 
+import os
+import statistics
 import time
 
 import numpy as np
 import scipy.signal
-from _harness import Table, median_time
+from _harness import Table
 from sklearn.cluster import KMeans
 from sklearn.decomposition import PCA
 from visprim import kernels
@@ -71,7 +79,7 @@ def visprim_pipeline(times, angles, offsets):
     starts, ends = seg.global_frames()
     vectors = kernels.resample_segments(filtered, starts, ends, n=N_SAMPLES)
     basis = fit_pca(vectors)
-    proj = (vectors - basis.mean) @ basis.eigenvectors[:, :F]
+    proj = basis.project(vectors, F)
     km = kernels.kmeans(proj, K, n_init=N_INIT, max_iter=300, tol=1e-4, seed=SEED)
     return {
         "filtered": filtered,
@@ -170,6 +178,18 @@ def reference_pipeline(times, angles, offsets):
 # ---------------------------------------------------------------------------- run
 
 
+def interleaved_medians(a, b, repeat: int) -> tuple[float, float]:
+    """Median wall times of ``a()`` and ``b()`` run alternately (a, b, a, b, ...), so that
+    both see the same machine load (this machine is shared)."""
+    ta, tb = [], []
+    for _ in range(repeat):
+        for fn, out in ((a, ta), (b, tb)):
+            t0 = time.perf_counter()
+            fn()
+            out.append(time.perf_counter() - t0)
+    return statistics.median(ta), statistics.median(tb)
+
+
 def check_same(ours: dict, ref: dict) -> str:
     """Both pipelines computed the same thing; returns a note for the table."""
     np.testing.assert_allclose(ours["filtered"], ref["filtered"], rtol=0, atol=1e-9)
@@ -185,6 +205,11 @@ def check_same(ours: dict, ref: dict) -> str:
 
 def run(table: Table, quick: bool = False) -> None:
     n_trials = 600 if quick else 10_000
+    env = ", ".join(
+        f"{v}={os.environ.get(v, 'unset')}"
+        for v in ("RAYON_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+    )
+    print(f"pipeline: thread settings {env}", flush=True)
     print(f"pipeline: generating {n_trials} trials (untimed) ...", flush=True)
     t0 = time.perf_counter()
     times, angles, offsets = corpus(n_trials)
@@ -192,9 +217,11 @@ def run(table: Table, quick: bool = False) -> None:
     ours = visprim_pipeline(times, angles, offsets)
     ref = reference_pipeline(times, angles, offsets)
     note = check_same(ours, ref)
-    repeat = 3
-    t_ours = median_time(lambda: visprim_pipeline(times, angles, offsets), repeat=repeat, warmup=0)
-    t_ref = median_time(lambda: reference_pipeline(times, angles, offsets), repeat=repeat, warmup=0)
+    t_ours, t_ref = interleaved_medians(
+        lambda: visprim_pipeline(times, angles, offsets),
+        lambda: reference_pipeline(times, angles, offsets),
+        repeat=3 if quick else 5,
+    )
     work = f"pipeline {n_trials} trials"
     per = f"{ours['n_segments']} segments"
     table.add(work, "visprim (Rust kernels)", t_ours, per, note)
@@ -232,7 +259,7 @@ def stage_timings(times, angles, offsets) -> list[tuple[str, str, float]]:
     timed("resample", "numpy", lambda: ref_resample(f2, s, e, N_SAMPLES))
     b = timed("PCA", "visprim", lambda: fit_pca(v))
     timed("PCA", "sklearn", lambda: PCA(F, svd_solver="covariance_eigh").fit_transform(v))
-    p = np.ascontiguousarray((v - b.mean) @ b.eigenvectors[:, :F])
+    p = b.project(v, F)
     timed("k-means", "visprim", lambda: kernels.kmeans(p, K, n_init=N_INIT, seed=SEED))
     timed(
         "k-means",

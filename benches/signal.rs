@@ -84,7 +84,9 @@ fn bench_filter(c: &mut Criterion) {
     g.finish();
 }
 
-fn block_bench<const W: usize>(g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>) {
+fn block_bench<const W: usize>(
+    g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+) {
     let secs = sections(&butter_sos(10, 0.25).unwrap());
     let len = FRAMES + 2 * 33;
     let mut rng = Rng(11);
@@ -120,7 +122,10 @@ fn bench_block(c: &mut Criterion) {
 }
 
 fn bench_zvc_resample(c: &mut Criterion) {
-    let (values, offsets) = corpus();
+    // As in the pipeline: filtered angles, their velocity, crossings, segments.
+    let (raw, offsets) = corpus();
+    let sos = butter_sos(10, 0.25).unwrap();
+    let values = sosfiltfilt_ragged(&sos, &raw, CHANNELS, &offsets, None).unwrap();
     let vel = velocity(&values);
     let mut g = c.benchmark_group("zvc_resample");
     g.sample_size(20).measurement_time(Duration::from_secs(5));

@@ -191,7 +191,7 @@ def test_reconstruct_movement_covers_the_movement_and_tracks_it():
     _, rec_c = m.reconstruct_movement(trial, source="cluster")
     rms_c = math.degrees(np.sqrt(np.mean((rec_c - orig) ** 2)))
     # 30 eigenvectors keep > 99.9 % of the variance; the primitives are coarser.
-    assert rms_p < 1.0
+    assert rms_p < 0.5
     assert rms_p < rms_c
 
 

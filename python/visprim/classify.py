@@ -33,8 +33,8 @@ class TrialClassification:
     name : str — the trial's name.
     segments : (n, 2) float array, seconds — the trial's segments (model's segmentation).
     labels : (n,) int array — primitive of each segment, in time order (the *sequence*).
-    distances : (n,) float array, rad² — squared distance of each segment's projection to
-        its primitive's centre.
+    distances : (n,) float array, radians — Euclidean distance of each segment's projection
+        to its primitive's centre.
     n_primitives : int — number of primitives k of the model.
     """
 

@@ -193,3 +193,173 @@ def resample_segments(values: ArrayLike, starts: ArrayLike, ends: ArrayLike, n: 
 
 
 # --- linalg kernels (covariance, eigh, kmeans) ---
+
+
+def _matrix(x: ArrayLike) -> Any:
+    """Nested lists/tuples become float64 arrays; anything else goes to the kernel unchanged
+    (it raises TypeError for non-arrays and for float32/int arrays: convert on purpose)."""
+    return np.asarray(x, dtype=np.float64) if isinstance(x, (list, tuple)) else x
+
+
+def covariance(x: ArrayLike, *, n_threads: int | None = None) -> tuple[_F64, _F64]:
+    """Mean and covariance, with divisor N (the paper's ``K``), of the rows of ``x``.
+
+    Rows are centred by a shift in blocks before the product (no ``XᵀX - N μμᵀ``
+    cancellation), and only the lower half of ``Σ (x - μ)(x - μ)ᵀ`` is formed (faer's
+    triangular matrix product); the result is exactly symmetric and does not depend on the
+    number of threads.
+
+    Args:
+        x: ``(N, d)`` float64, one observation per row (units kept: the covariance is in
+            squared units of ``x``). Non-contiguous arrays are copied.
+        n_threads: threads to use (``None``: all cores).
+
+    Returns:
+        ``(mean (d,), covariance (d, d))``, equal to ``x.mean(0)`` and
+        ``numpy.cov(x, rowvar=False, bias=True)`` up to rounding.
+
+    Raises:
+        TypeError: ``x`` is not a float64 ndarray.
+        ValueError: ``x`` is not 2-D, is empty, or contains NaN/inf.
+    """
+    return _visprim.covariance(_matrix(x), n_threads=n_threads)
+
+
+CovarianceAccumulator = _visprim.CovarianceAccumulator
+
+
+def eigh(a: ArrayLike, *, k: int | None = None) -> tuple[_F64, _F64]:
+    """Eigendecomposition of a symmetric matrix (faer), eigenvalues in DESCENDING order.
+
+    Sign convention: in every eigenvector, the component of largest absolute value is
+    positive (the first such component on exact ties). The eigenvectors of a repeated
+    eigenvalue span its eigenspace in no particular basis. Only the lower triangle is used,
+    like ``numpy.linalg.eigh`` (``UPLO='L'``), once symmetry is checked.
+
+    Args:
+        a: ``(d, d)`` float64 symmetric matrix (e.g. a covariance).
+        k: return only the ``k`` leading pairs (``1 <= k <= d``); ``None``: all ``d``.
+
+    Returns:
+        ``(eigenvalues (k,), eigenvectors (d, k))``: column ``j`` is the unit eigenvector of
+        ``eigenvalues[j]``; equal to ``numpy.linalg.eigh`` up to order and sign.
+
+    Raises:
+        TypeError: ``a`` is not a float64 ndarray.
+        ValueError: not square, empty, NaN/inf, asymmetric beyond ``1e-10 * max|a|``, or ``k``
+            out of range.
+        RuntimeError: the eigensolver did not converge.
+    """
+    return _visprim.eigh(_matrix(a), k=k)
+
+
+KMeansResult = _visprim.KMeansResult
+
+
+def kmeans(
+    x: ArrayLike,
+    k: int,
+    *,
+    n_init: int = 1,
+    max_iter: int = 300,
+    tol: float = 1e-4,
+    seed: int = 0,
+    init: ArrayLike | None = None,
+    n_local_trials: int | None = None,
+    n_threads: int | None = None,
+) -> Any:
+    """k-means clustering: greedy k-means++ seeding, Lloyd iterations, best of ``n_init``.
+
+    Semantics of scikit-learn's ``KMeans(algorithm="lloyd")``: one iteration assigns each row
+    to its nearest centre (ties: lowest index) then moves every centre to the mean of its
+    rows; iterations stop when no label changes, when the total squared centre shift is
+    ``<= tol * mean(var(X, axis=0))``, or after ``max_iter`` (then the rows are relabelled
+    with the final centres). From the same ``init`` it gives scikit-learn's labels and
+    centres up to rounding. A cluster left empty is re-seeded with the row farthest from its
+    centre (the i-th empty cluster, by index, takes the i-th farthest row; the row's old
+    cluster loses it); if all rows sit on their centres it keeps its centre.
+
+    Seeding: the first centre is a uniformly drawn row; each next one is the best (lowest
+    potential) of ``n_local_trials`` rows drawn with probability proportional to the squared
+    distance to the nearest centre so far (scikit-learn's greedy k-means++).
+
+    Exact acceleration (results equal plain Lloyd's, except for rows whose two nearest
+    centres tie within ~1e-11 of the data diameter): triangle-inequality bounds skip most
+    distance computations. The result for a given ``seed`` is identical for any number of
+    threads (fixed work split, ordered sums).
+
+    Args:
+        x: ``(N, d)`` float64, one observation per row.
+        k: number of clusters, ``1 <= k <= N``.
+        n_init: independent seedings; the run with the lowest inertia is kept (must be 1
+            when ``init`` is given).
+        max_iter: maximum Lloyd iterations per run (>= 1).
+        tol: relative tolerance on the centre shift (>= 0; scaled as above).
+        seed: seed of the random draws, an integer in ``[0, 2**64)``; run ``r`` of
+            ``n_init`` uses a seed derived from ``seed`` and ``r`` (run 0 uses ``seed``).
+        init: ``(k, d)`` float64 initial centres instead of k-means++.
+        n_local_trials: candidates per seeding step, 1..64 (``None``: ``2 + floor(ln k)``).
+        n_threads: threads to use (``None``: all cores).
+
+    Returns:
+        :class:`KMeansResult` with ``centers``, ``labels``, ``inertia``, ``n_iter``.
+
+    Raises:
+        TypeError: ``x`` or ``init`` is not a float64 ndarray.
+        ValueError: bad shapes, empty input, NaN/inf, ``k`` outside ``1..N``, ``n_init``,
+            ``max_iter``, ``n_local_trials``, ``n_threads`` < 1, negative ``tol``, or
+            ``init`` with ``n_init > 1``.
+    """
+    return _visprim.kmeans(
+        _matrix(x),
+        k,
+        n_init=n_init,
+        max_iter=max_iter,
+        tol=tol,
+        seed=seed,
+        init=None if init is None else _matrix(init),
+        n_local_trials=n_local_trials,
+        n_threads=n_threads,
+    )
+
+
+def kmeans_predict(
+    x: ArrayLike, centers: ArrayLike, *, n_threads: int | None = None
+) -> tuple[_I64, _F64]:
+    """Assign rows to their nearest centre (e.g. new segments to learned primitives).
+
+    Args:
+        x: ``(N, d)`` float64 rows.
+        centers: ``(k, d)`` float64 centres (e.g. ``kmeans(...).centers``).
+        n_threads: threads to use (``None``: all cores).
+
+    Returns:
+        ``(labels (N,) int64, distances (N,) float64)``: index of the nearest centre (lowest
+        index on ties) and the Euclidean distance to it, in the units of ``x``.
+
+    Raises:
+        TypeError: an argument is not a float64 ndarray.
+        ValueError: not 2-D, empty, column counts differ, or NaN/inf.
+    """
+    return _visprim.kmeans_predict(_matrix(x), _matrix(centers), n_threads=n_threads)
+
+
+def kmeans_plusplus(
+    x: ArrayLike,
+    k: int,
+    *,
+    seed: int = 0,
+    n_local_trials: int | None = None,
+    n_threads: int | None = None,
+) -> tuple[_F64, _I64]:
+    """Greedy k-means++ seeds (the initialisation :func:`kmeans` uses for ``n_init=1``).
+
+    Returns:
+        ``(centers (k, d), indices (k,) int64)`` with ``centers == x[indices]``.
+
+    Raises:
+        TypeError / ValueError: as :func:`kmeans`.
+    """
+    return _visprim.kmeans_plusplus(
+        _matrix(x), k, seed=seed, n_local_trials=n_local_trials, n_threads=n_threads
+    )

@@ -344,7 +344,7 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         fitted settings first (segments in trial order).
         """
         self._check_fitted()
-        return (self._vectors_of(X) - self.mean_) @ self.components_
+        return self.basis_.project(self._vectors_of(X), int(self.n_components))
 
     def predict(self, X: ArrayLike | Sequence[Trial] | Trial) -> NDArray[np.int64]:
         """Primitive (nearest cluster centre in the projection space) of each segment."""
@@ -352,7 +352,8 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         return labels
 
     def assign(self, projections: ArrayLike) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-        """Nearest centre of f-D projections: ``(labels (N,), squared distances (N,))``."""
+        """Nearest centre of f-D projections: ``(labels (N,), Euclidean distances (N,))``
+        (distances in the units of the projections, radians)."""
         self._check_fitted()
         p = np.ascontiguousarray(np.atleast_2d(projections), dtype=np.float64)
         if p.shape[1] != self.cluster_centers_.shape[1]:

@@ -233,7 +233,7 @@ def _classify(args: argparse.Namespace) -> int:
         out = Path(args.out)
         out.parent.mkdir(parents=True, exist_ok=True)
         with out.open("w", encoding="utf-8") as fh:
-            fh.write("trial,segment,start_s,end_s,primitive,squared_distance_rad2\n")
+            fh.write("trial,segment,start_s,end_s,primitive,distance_rad\n")
             for r in results:
                 for j, ((s, e), lab, d) in enumerate(
                     zip(r.segments, r.labels, r.distances, strict=True)

@@ -173,8 +173,8 @@ impl Moments {
         // not always in floating point; keep the matrix exactly symmetric.
         symmetrize_from_lower(&mut self.scatter, d);
         let fb = nb / n;
-        for i in 0..d {
-            self.mean[i] += delta[i] * fb;
+        for (m, dl) in self.mean.iter_mut().zip(&delta) {
+            *m += dl * fb;
         }
         self.count += other.count;
         Ok(())

@@ -7,9 +7,9 @@
 //! Like `numpy.linalg.eigh` (`UPLO='L'`) only the lower triangle `a[i, j], i ≥ j` is read once
 //! the matrix has been checked to be symmetric.
 
+use faer::diag::Diag;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::evd::{self, ComputeEigenvectors};
-use faer::diag::Diag;
 use faer::{Mat, MatRef, Par};
 
 use crate::{Error, Result};

@@ -57,7 +57,14 @@ pub struct KMeansParams {
 impl KMeansParams {
     /// Defaults of scikit-learn's `KMeans` for `k` clusters (one k-means++ run).
     pub fn new(k: usize) -> Self {
-        Self { k, n_init: 1, max_iter: 300, tol: 1e-4, seed: 0, n_local_trials: None }
+        Self {
+            k,
+            n_init: 1,
+            max_iter: 300,
+            tol: 1e-4,
+            seed: 0,
+            n_local_trials: None,
+        }
     }
 }
 
@@ -94,13 +101,11 @@ pub fn kmeans(
 ) -> Result<KMeansResult> {
     let stats = data_stats(x, n, d, "X")?;
     let k = params.k;
-    if k < 1 || k > n {
-        return Err(Error::InvalidArgument(format!(
-            "k must be between 1 and the number of rows of X ({n}), got {k}"
-        )));
-    }
     if params.n_init < 1 {
-        return Err(Error::InvalidArgument(format!("n_init must be ≥ 1, got {}", params.n_init)));
+        return Err(Error::InvalidArgument(format!(
+            "n_init must be ≥ 1, got {}",
+            params.n_init
+        )));
     }
     if params.max_iter < 1 {
         return Err(Error::InvalidArgument(format!(
@@ -114,12 +119,10 @@ pub fn kmeans(
             params.tol
         )));
     }
-    let trials = params.n_local_trials.unwrap_or_else(|| default_local_trials(k));
-    if !(1..=MAX_LOCAL_TRIALS).contains(&trials) {
-        return Err(Error::InvalidArgument(format!(
-            "n_local_trials must be between 1 and {MAX_LOCAL_TRIALS}, got {trials}"
-        )));
-    }
+    let trials = params
+        .n_local_trials
+        .unwrap_or_else(|| default_local_trials(k));
+    check_k_and_trials(k, n, trials)?;
     let tol_abs = params.tol * stats.mean_variance;
     let diameter = stats.diameter;
 
@@ -163,8 +166,15 @@ fn run(
     tol_abs: f64,
     diameter: f64,
 ) -> KMeansResult {
-    let r = lloyd(x, n, d, init, k, max_iter, tol_abs, diameter);
-    KMeansResult { centers: r.centers, labels: r.labels, inertia: r.inertia, n_iter: r.n_iter, k, dim: d }
+    let r = lloyd(x, n, d, init, k, max_iter, tol_abs, diameter, None);
+    KMeansResult {
+        centers: r.centers,
+        labels: r.labels,
+        inertia: r.inertia,
+        n_iter: r.n_iter,
+        k,
+        dim: d,
+    }
 }
 
 /// Nearest centre (lowest index on ties) and squared distance of every row of the row-major
@@ -190,15 +200,19 @@ pub fn predict(
     let ch = crate::kmeanspp::CHUNK;
     let mut labels = vec![0u32; n];
     let mut dist = vec![0.0; n];
-    labels.par_chunks_mut(ch).zip(dist.par_chunks_mut(ch)).enumerate().for_each(
-        |(b, (lab, dst))| {
+    labels
+        .par_chunks_mut(ch)
+        .zip(dist.par_chunks_mut(ch))
+        .enumerate()
+        .for_each(|(b, (lab, dst))| {
             let mut buf = vec![0.0; GROUP * panel.kpad()];
             let kp = panel.kpad();
             for g in 0..lab.len().div_ceil(GROUP) {
                 let lo = g * GROUP;
                 let hi = (lo + GROUP).min(lab.len());
-                let rows: Vec<&[f64]> =
-                    (b * ch + lo..b * ch + hi).map(|i| &x[i * d..(i + 1) * d]).collect();
+                let rows: Vec<&[f64]> = (b * ch + lo..b * ch + hi)
+                    .map(|i| &x[i * d..(i + 1) * d])
+                    .collect();
                 sq_dists(&rows, &panel, &mut buf);
                 for r in 0..hi - lo {
                     let (best, bd, _) = two_nearest(&buf[r * kp..r * kp + k]);
@@ -206,9 +220,23 @@ pub fn predict(
                     dst[lo + r] = bd;
                 }
             }
-        },
-    );
+        });
     Ok((labels, dist))
+}
+
+/// Check `1 ≤ k ≤ n` and `1 ≤ n_local_trials ≤ 64`.
+pub fn check_k_and_trials(k: usize, n: usize, trials: usize) -> Result<()> {
+    if k < 1 || k > n {
+        return Err(Error::InvalidArgument(format!(
+            "k must be between 1 and the number of rows of X ({n}), got {k}"
+        )));
+    }
+    if !(1..=MAX_LOCAL_TRIALS).contains(&trials) {
+        return Err(Error::InvalidArgument(format!(
+            "n_local_trials must be between 1 and {MAX_LOCAL_TRIALS}, got {trials}"
+        )));
+    }
+    Ok(())
 }
 
 /// Column statistics gathered in one pass over the data.
@@ -246,12 +274,12 @@ pub fn data_stats(x: &[f64], n: usize, d: usize, name: &str) -> Result<DataStats
             let mut s2 = vec![0.0; d];
             let mut lo = vec![f64::INFINITY; d];
             let mut hi = vec![f64::NEG_INFINITY; d];
-            // (v - v) is 0 for finite values and NaN otherwise: vectorizable finiteness test.
+            // v·0 is ±0 for finite values and NaN otherwise: a vectorizable finiteness test.
             let mut nan = 0.0;
             for row in c.chunks_exact(d) {
                 for j in 0..d {
                     let v = row[j];
-                    nan += v - v;
+                    nan += v * 0.0;
                     let t = v - shift[j];
                     s1[j] += t;
                     s2[j] += t * t;
@@ -262,7 +290,9 @@ pub fn data_stats(x: &[f64], n: usize, d: usize, name: &str) -> Result<DataStats
             let bad = if nan == 0.0 {
                 None
             } else {
-                c.iter().position(|v| !v.is_finite()).map(|p| b * ch * d + p)
+                c.iter()
+                    .position(|v| !v.is_finite())
+                    .map(|p| b * ch * d + p)
             };
             (bad, s1, s2, lo, hi)
         })
@@ -287,13 +317,28 @@ pub fn data_stats(x: &[f64], n: usize, d: usize, name: &str) -> Result<DataStats
         }
     }
     let nf = n as f64;
-    let var_sum: f64 = (0..d).map(|j| (s2[j] / nf - (s1[j] / nf).powi(2)).max(0.0)).sum();
+    let var_sum: f64 = (0..d)
+        .map(|j| (s2[j] / nf - (s1[j] / nf).powi(2)).max(0.0))
+        .sum();
     // Half the diagonal of the bounding box plus its farthest corner's distance from the
     // origin (coordinate rounding scales with magnitude): covers every distance computed.
-    let half: f64 = lo.iter().zip(&hi).map(|(a, b)| (b - a) * (b - a)).sum::<f64>().sqrt() / 2.0;
-    let far: f64 =
-        lo.iter().zip(&hi).map(|(a, b)| a.abs().max(b.abs()).powi(2)).sum::<f64>().sqrt();
-    Ok(DataStats { mean_variance: var_sum / d as f64, diameter: 2.0 * (half + far) })
+    let half: f64 = lo
+        .iter()
+        .zip(&hi)
+        .map(|(a, b)| (b - a) * (b - a))
+        .sum::<f64>()
+        .sqrt()
+        / 2.0;
+    let far: f64 = lo
+        .iter()
+        .zip(&hi)
+        .map(|(a, b)| a.abs().max(b.abs()).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    Ok(DataStats {
+        mean_variance: var_sum / d as f64,
+        diameter: 2.0 * (half + far),
+    })
 }
 
 fn run_seed(seed: u64, run: u64) -> u64 {
@@ -339,7 +384,15 @@ mod tests {
     }
 
     /// Plain Lloyd (brute force, direct distances) with the same stopping rules.
-    fn reference(x: &[f64], n: usize, d: usize, init: &[f64], k: usize, max_iter: usize, tol: f64) -> (Vec<f64>, Vec<u32>, usize) {
+    fn reference(
+        x: &[f64],
+        n: usize,
+        d: usize,
+        init: &[f64],
+        k: usize,
+        max_iter: usize,
+        tol: f64,
+    ) -> (Vec<f64>, Vec<u32>, usize) {
         let assign = |c: &[f64]| -> Vec<u32> {
             (0..n)
                 .map(|i| {
@@ -404,13 +457,23 @@ mod tests {
     fn finds_separated_blobs() {
         let centres = [[0.0, 0.0], [10.0, 0.0], [0.0, 10.0]];
         let x = blobs(100, &centres, 1.0, 1);
-        let res = kmeans(&x, 300, 2, &KMeansParams { n_init: 3, ..KMeansParams::new(3) }, None).unwrap();
-        for i in 0..3 {
+        let res = kmeans(
+            &x,
+            300,
+            2,
+            &KMeansParams {
+                n_init: 3,
+                ..KMeansParams::new(3)
+            },
+            None,
+        )
+        .unwrap();
+        for (i, want) in centres.iter().enumerate() {
             // All rows of one blob share a label, and the blobs have different labels.
             let l = res.labels[i * 100];
             assert!(res.labels[i * 100..(i + 1) * 100].iter().all(|&v| v == l));
             let c = &res.centers[l as usize * 2..l as usize * 2 + 2];
-            assert!((c[0] - centres[i][0]).abs() < 0.2 && (c[1] - centres[i][1]).abs() < 0.2);
+            assert!((c[0] - want[0]).abs() < 0.2 && (c[1] - want[1]).abs() < 0.2);
         }
         // Variance of U(-0.5, 0.5) is 1/12 per coordinate: inertia ≈ 300 · 2 / 12.
         assert!((res.inertia - 50.0).abs() < 10.0, "{}", res.inertia);
@@ -419,11 +482,20 @@ mod tests {
     #[test]
     fn matches_plain_lloyd_from_the_same_start() {
         let mut rng = Rng::new(3);
-        for &(n, d, k) in &[(500usize, 3usize, 7usize), (2500, 5, 20), (3000, 2, 1), (1200, 30, 40)] {
+        for &(n, d, k) in &[
+            (500usize, 3usize, 7usize),
+            (2500, 5, 20),
+            (3000, 2, 1),
+            (1200, 30, 40),
+        ] {
             let x: Vec<f64> = (0..n * d).map(|_| rng.uniform() * 10.0).collect();
             let init: Vec<f64> = x[..k * d].to_vec();
             for &(max_iter, tol) in &[(300usize, 0.0), (300, 1e-4), (3, 1e-4)] {
-                let p = KMeansParams { max_iter, tol, ..KMeansParams::new(k) };
+                let p = KMeansParams {
+                    max_iter,
+                    tol,
+                    ..KMeansParams::new(k)
+                };
                 let res = kmeans(&x, n, d, &p, Some(&init)).unwrap();
                 let (c, l, it) = reference(&x, n, d, &init, k, max_iter, tol);
                 assert_eq!(res.labels, l, "n={n} k={k} max_iter={max_iter} tol={tol}");
@@ -433,6 +505,30 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn both_scan_modes_match_plain_lloyd_over_many_iterations() {
+        let mut rng = Rng::new(21);
+        let mut longest = 0;
+        for &(n, d, k) in &[(3000usize, 2usize, 40usize), (2000, 6, 12), (2500, 3, 70)] {
+            let x: Vec<f64> = (0..n * d).map(|_| rng.uniform() * 4.0 - 2.0).collect();
+            let init: Vec<f64> = x[(n - k) * d..].to_vec();
+            let stats = data_stats(&x, n, d, "X").unwrap();
+            let (c, l, it) = reference(&x, n, d, &init, k, 500, 0.0);
+            longest = longest.max(it);
+            for direct in [true, false] {
+                let r =
+                    crate::lloyd::lloyd(&x, n, d, &init, k, 500, 0.0, stats.diameter, Some(direct));
+                assert_eq!(r.labels, l, "n={n} k={k} direct={direct}");
+                assert_eq!(r.n_iter, it);
+                for (a, b) in r.centers.iter().zip(&c) {
+                    assert!((a - b).abs() <= 1e-12);
+                }
+            }
+        }
+        // The bounds are re-anchored after 24 iterations: make sure that path ran.
+        assert!(longest > 30, "longest run {longest}");
     }
 
     #[test]
@@ -459,22 +555,36 @@ mod tests {
         let mut rng = Rng::new(9);
         let (n, d) = (5000, 4);
         let x: Vec<f64> = (0..n * d).map(|_| rng.uniform()).collect();
-        let p = KMeansParams { n_init: 3, seed: 11, ..KMeansParams::new(25) };
+        let p = KMeansParams {
+            n_init: 3,
+            seed: 11,
+            ..KMeansParams::new(25)
+        };
         let run = |t: usize| {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .unwrap();
             pool.install(|| kmeans(&x, n, d, &p, None).unwrap())
         };
         let one = run(1);
         assert_eq!(one, run(3));
         let single: Vec<f64> = (0..3)
             .map(|r| {
-                let q = KMeansParams { n_init: 1, seed: 11, ..p.clone() };
+                let q = KMeansParams {
+                    n_init: 1,
+                    seed: 11,
+                    ..p.clone()
+                };
                 let mut rng = Rng::new(run_seed(q.seed, r));
                 let (c, _) = kmeans_plusplus(&x, n, d, 25, default_local_trials(25), &mut rng);
                 kmeans(&x, n, d, &q, Some(&c)).unwrap().inertia
             })
             .collect();
-        assert_eq!(one.inertia, single.iter().cloned().fold(f64::INFINITY, f64::min));
+        assert_eq!(
+            one.inertia,
+            single.iter().cloned().fold(f64::INFINITY, f64::min)
+        );
     }
 
     #[test]
@@ -491,19 +601,97 @@ mod tests {
         let x = vec![0.0; 10];
         let p = KMeansParams::new(2);
         assert!(matches!(kmeans(&[], 0, 2, &p, None), Err(Error::Shape(_))));
-        assert!(matches!(kmeans(&x, 5, 2, &KMeansParams::new(6), None), Err(Error::InvalidArgument(_))));
-        assert!(matches!(kmeans(&x, 5, 2, &KMeansParams::new(0), None), Err(Error::InvalidArgument(_))));
-        assert!(matches!(kmeans(&x, 5, 2, &KMeansParams { n_init: 0, ..p.clone() }, None), Err(Error::InvalidArgument(_))));
-        assert!(matches!(kmeans(&x, 5, 2, &KMeansParams { max_iter: 0, ..p.clone() }, None), Err(Error::InvalidArgument(_))));
-        assert!(matches!(kmeans(&x, 5, 2, &KMeansParams { tol: -1.0, ..p.clone() }, None), Err(Error::InvalidArgument(_))));
-        assert!(matches!(kmeans(&x, 5, 2, &KMeansParams { n_local_trials: Some(0), ..p.clone() }, None), Err(Error::InvalidArgument(_))));
-        assert!(matches!(kmeans(&x, 5, 2, &p, Some(&[0.0; 3])), Err(Error::Shape(_))));
-        assert!(matches!(kmeans(&x, 5, 2, &KMeansParams { n_init: 2, ..p.clone() }, Some(&[0.0; 4])), Err(Error::InvalidArgument(_))));
+        assert!(matches!(
+            kmeans(&x, 5, 2, &KMeansParams::new(6), None),
+            Err(Error::InvalidArgument(_))
+        ));
+        assert!(matches!(
+            kmeans(&x, 5, 2, &KMeansParams::new(0), None),
+            Err(Error::InvalidArgument(_))
+        ));
+        assert!(matches!(
+            kmeans(
+                &x,
+                5,
+                2,
+                &KMeansParams {
+                    n_init: 0,
+                    ..p.clone()
+                },
+                None
+            ),
+            Err(Error::InvalidArgument(_))
+        ));
+        assert!(matches!(
+            kmeans(
+                &x,
+                5,
+                2,
+                &KMeansParams {
+                    max_iter: 0,
+                    ..p.clone()
+                },
+                None
+            ),
+            Err(Error::InvalidArgument(_))
+        ));
+        assert!(matches!(
+            kmeans(
+                &x,
+                5,
+                2,
+                &KMeansParams {
+                    tol: -1.0,
+                    ..p.clone()
+                },
+                None
+            ),
+            Err(Error::InvalidArgument(_))
+        ));
+        assert!(matches!(
+            kmeans(
+                &x,
+                5,
+                2,
+                &KMeansParams {
+                    n_local_trials: Some(0),
+                    ..p.clone()
+                },
+                None
+            ),
+            Err(Error::InvalidArgument(_))
+        ));
+        assert!(matches!(
+            kmeans(&x, 5, 2, &p, Some(&[0.0; 3])),
+            Err(Error::Shape(_))
+        ));
+        assert!(matches!(
+            kmeans(
+                &x,
+                5,
+                2,
+                &KMeansParams {
+                    n_init: 2,
+                    ..p.clone()
+                },
+                Some(&[0.0; 4])
+            ),
+            Err(Error::InvalidArgument(_))
+        ));
         let mut bad = x.clone();
         bad[3] = f64::NAN;
-        assert!(matches!(kmeans(&bad, 5, 2, &p, None), Err(Error::NonFinite(_))));
-        assert!(matches!(kmeans(&x, 5, 2, &p, Some(&[0.0, 0.0, f64::INFINITY, 0.0])), Err(Error::NonFinite(_))));
+        assert!(matches!(
+            kmeans(&bad, 5, 2, &p, None),
+            Err(Error::NonFinite(_))
+        ));
+        assert!(matches!(
+            kmeans(&x, 5, 2, &p, Some(&[0.0, 0.0, f64::INFINITY, 0.0])),
+            Err(Error::NonFinite(_))
+        ));
         assert!(matches!(predict(&x, 5, 2, &[], 0), Err(Error::Shape(_))));
-        assert!(matches!(predict(&x, 5, 2, &[0.0; 3], 2), Err(Error::Shape(_))));
+        assert!(matches!(
+            predict(&x, 5, 2, &[0.0; 3], 2),
+            Err(Error::Shape(_))
+        ));
     }
 }

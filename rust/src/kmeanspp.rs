@@ -91,7 +91,11 @@ impl Cluster {
             pot += v;
             radius2 = radius2.max(v);
         }
-        Self { members, pot, radius2 }
+        Self {
+            members,
+            pot,
+            radius2,
+        }
     }
 }
 
@@ -121,18 +125,21 @@ pub fn kmeans_plusplus(
     // closest[i]: squared distance of row i to its nearest centre so far.
     let mut closest = vec![0.0; n];
     let first = Panel::from_rows(x, d, &indices);
-    closest.par_chunks_mut(CHUNK).enumerate().for_each(|(b, dst)| {
-        let kp = first.kpad();
-        let mut buf = vec![0.0; GROUP * kp];
-        for (g, dg) in dst.chunks_mut(GROUP).enumerate() {
-            let start = b * CHUNK + g * GROUP;
-            let rows: Vec<&[f64]> = (start..start + dg.len()).map(row).collect();
-            sq_dists(&rows, &first, &mut buf);
-            for (r, v) in dg.iter_mut().enumerate() {
-                *v = buf[r * kp];
+    closest
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .for_each(|(b, dst)| {
+            let kp = first.kpad();
+            let mut buf = vec![0.0; GROUP * kp];
+            for (g, dg) in dst.chunks_mut(GROUP).enumerate() {
+                let start = b * CHUNK + g * GROUP;
+                let rows: Vec<&[f64]> = (start..start + dg.len()).map(row).collect();
+                sq_dists(&rows, &first, &mut buf);
+                for (r, v) in dg.iter_mut().enumerate() {
+                    *v = buf[r * kp];
+                }
             }
-        }
-    });
+        });
     let mut clusters = vec![Cluster::from_members((0..n as u32).collect(), &closest)];
 
     let mut candidates = vec![0usize; trials];
@@ -156,7 +163,9 @@ pub fn kmeans_plusplus(
         let masks: Vec<u64> = (0..c)
             .map(|j| {
                 let lim = 4.0 * clusters[j].radius2;
-                (0..trials).filter(|&t| cc[j * kp + t] < lim).fold(0u64, |m, t| m | (1 << t))
+                (0..trials)
+                    .filter(|&t| cc[j * kp + t] < lim)
+                    .fold(0u64, |m, t| m | (1 << t))
             })
             .collect();
 
@@ -173,7 +182,7 @@ pub fn kmeans_plusplus(
         // Per item: the rows whose distances were computed (position in the item, distances
         // to the candidates), and Σ min(D, d_t) per candidate. A row is only compared with
         // candidate t when ‖c - t‖² < 4·D(x)² (otherwise t cannot be closer than its centre).
-        let results: Vec<(Vec<(u32, usize)>, Vec<f64>, Vec<f64>)> = items
+        let results: Vec<(Vec<u32>, Vec<f64>, Vec<f64>)> = items
             .par_iter()
             .map(|&(j, s, e)| {
                 let members = &clusters[j].members[s..e];
@@ -205,12 +214,11 @@ pub fn kmeans_plusplus(
                         }
                     }
                 }
-                let positions = computed.iter().map(|&(r, _)| (r, 0)).collect();
+                let positions = computed.iter().map(|&(r, _)| r).collect();
                 (positions, dist, pots)
             })
             .collect();
 
-        if std::env::var("KDBG").is_ok() { eprintln!("c {c} items {} computed {} active clusters {}", items.len(), results.iter().map(|r| r.0.len()).sum::<usize>(), masks.iter().filter(|&&m| m != 0).count()); }
         // Potential left by each candidate; keep the smallest (first on ties).
         let mut best = 0;
         let mut best_pot = f64::INFINITY;
@@ -243,7 +251,9 @@ pub fn kmeans_plusplus(
             first_item[j] = it;
         }
         let touched: Vec<usize> = (0..c).filter(|&j| masks[j] >> best & 1 == 1).collect();
-        let moved: Vec<(Vec<u32>, Vec<(u32, f64)>)> = touched
+        // Per touched cluster: the rows it keeps and the (row, distance) it loses.
+        type Moved = (Vec<u32>, Vec<(u32, f64)>);
+        let moved: Vec<Moved> = touched
             .par_iter()
             .map(|&j| {
                 let mut keep = Vec::with_capacity(clusters[j].members.len());
@@ -255,7 +265,7 @@ pub fn kmeans_plusplus(
                     let (positions, dist) = (&results[it].0, &results[it].1);
                     let mut next = 0;
                     for (r, &i) in members[s..e].iter().enumerate() {
-                        if next < positions.len() && positions[next].0 as usize == r {
+                        if next < positions.len() && positions[next] as usize == r {
                             let v = dist[next * trials + best];
                             next += 1;
                             if v < closest[i as usize] {
@@ -299,7 +309,12 @@ fn sample(clusters: &[Cluster], closest: &[f64], r: f64) -> usize {
                 }
             }
             // Rounding: fall back to the cluster's last row with a positive weight.
-            if let Some(&i) = cl.members.iter().rev().find(|&&i| closest[i as usize] > 0.0) {
+            if let Some(&i) = cl
+                .members
+                .iter()
+                .rev()
+                .find(|&&i| closest[i as usize] > 0.0)
+            {
                 return i as usize;
             }
         }
@@ -367,11 +382,19 @@ mod tests {
         let mut members: Vec<Vec<u32>> = vec![(0..n as u32).collect()];
         let mut assign = vec![0usize; n];
         for c in 1..k {
-            let clusters: Vec<Cluster> =
-                members.iter().map(|m| Cluster::from_members(m.clone(), &closest)).collect();
+            let clusters: Vec<Cluster> = members
+                .iter()
+                .map(|m| Cluster::from_members(m.clone(), &closest))
+                .collect();
             let pot: f64 = clusters.iter().map(|cl| cl.pot).sum();
             let cands: Vec<usize> = (0..trials)
-                .map(|_| if pot > 0.0 { sample(&clusters, &closest, rng.uniform() * pot) } else { rng.below(n) })
+                .map(|_| {
+                    if pot > 0.0 {
+                        sample(&clusters, &closest, rng.uniform() * pot)
+                    } else {
+                        rng.below(n)
+                    }
+                })
                 .collect();
             let pots: Vec<f64> = cands
                 .iter()
@@ -388,7 +411,9 @@ mod tests {
                     assign[i] = c;
                 }
             }
-            members = (0..=c).map(|j| (0..n as u32).filter(|&i| assign[i as usize] == j).collect()).collect();
+            members = (0..=c)
+                .map(|j| (0..n as u32).filter(|&i| assign[i as usize] == j).collect())
+                .collect();
         }
         idx
     }

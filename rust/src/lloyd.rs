@@ -20,7 +20,6 @@ use rayon::prelude::*;
 
 use crate::sqdist::{sq_dist, sq_dists, two_nearest, Panel};
 
-pub static DBG_SCAN: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 /// Rows per parallel task of the bound tests.
 const CHUNK: usize = 2048;
 /// Rows per distance-kernel call.
@@ -29,6 +28,9 @@ const GROUP: usize = 64;
 const WINDOW: usize = 24;
 /// Memory allowed for the per-chunk partial sums of the first M-step.
 const PARTIAL_BYTES: usize = 128 << 20;
+/// Up to this many centres, rows that fail the bound tests are compared with every centre
+/// (cheap); above, only with the centres near their own (restricted scan).
+const DIRECT_MAX_K: usize = 32;
 /// Pruning margin, relative to the data diameter.
 const MARGIN: f64 = 1e-11;
 
@@ -41,7 +43,8 @@ pub(crate) struct LloydRun {
 }
 
 /// Run Lloyd from `init` (row-major `k × d`); `tol_abs` is the absolute tolerance on the total
-/// squared centre shift, `diameter` bounds the distances (for the pruning margin).
+/// squared centre shift, `diameter` bounds the distances (for the pruning margin). `direct`
+/// forces (or forbids) comparing failing rows with all centres; `None` chooses by `k`.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn lloyd(
     x: &[f64],
@@ -52,17 +55,16 @@ pub(crate) fn lloyd(
     max_iter: usize,
     tol_abs: f64,
     diameter: f64,
+    direct: Option<bool>,
 ) -> LloydRun {
-    let mut st = State::new(x, n, d, k, init, MARGIN * diameter);
+    let direct = direct.unwrap_or(k <= DIRECT_MAX_K);
+    let mut st = State::new(x, n, d, k, init, MARGIN * diameter, direct);
     let mut strict = false;
     let mut n_iter = 0;
     for it in 0..max_iter {
         n_iter = it + 1;
-        let t0 = std::time::Instant::now();
         let changes = st.e_step();
-        let t1 = t0.elapsed();
         let shift = st.m_step(&changes);
-        if std::env::var("KDBG").is_ok() { eprintln!("it {it} changes {} scan {} e {:?} m {:?}", changes.len(), DBG_SCAN.swap(0, std::sync::atomic::Ordering::Relaxed), t1, t0.elapsed() - t1); }
         if it > 0 && changes.is_empty() {
             strict = true;
             break;
@@ -75,7 +77,12 @@ pub(crate) fn lloyd(
         st.e_step();
     }
     let inertia = st.inertia();
-    LloydRun { centers: st.centers, labels: st.labels, inertia, n_iter }
+    LloydRun {
+        centers: st.centers,
+        labels: st.labels,
+        inertia,
+        n_iter,
+    }
 }
 
 /// A label change `(row, old, new)`.
@@ -107,7 +114,15 @@ struct State<'a> {
 }
 
 impl<'a> State<'a> {
-    fn new(x: &'a [f64], n: usize, d: usize, k: usize, init: &[f64], slack: f64) -> Self {
+    fn new(
+        x: &'a [f64],
+        n: usize,
+        d: usize,
+        k: usize,
+        init: &[f64],
+        slack: f64,
+        direct: bool,
+    ) -> Self {
         let mut hist = vec![Vec::new(); WINDOW + 1];
         hist[0] = init.to_vec();
         Self {
@@ -116,7 +131,7 @@ impl<'a> State<'a> {
             d,
             k,
             slack,
-            direct: match std::env::var("KDIRECT") { Ok(v) => v == "1", Err(_) => Panel::from_centers(init, k, d).kpad() <= 32 },
+            direct,
             now: 0,
             centers: init.to_vec(),
             panel: Panel::from_centers(init, k, d),
@@ -138,7 +153,11 @@ impl<'a> State<'a> {
 
     /// Assign every row to its nearest centre; returns the label changes in a fixed order.
     fn e_step(&mut self) -> Vec<Change> {
-        let changes = if self.now == 0 { self.full_scan() } else { self.pruned_scan() };
+        let changes = if self.now == 0 {
+            self.full_scan()
+        } else {
+            self.pruned_scan()
+        };
         self.now += 1;
         changes
     }
@@ -158,8 +177,9 @@ impl<'a> State<'a> {
                 for g in 0..lab.len().div_ceil(GROUP) {
                     let (s, e) = (g * GROUP, ((g + 1) * GROUP).min(lab.len()));
                     let base = b * CHUNK;
-                    let rows: Vec<&[f64]> =
-                        (base + s..base + e).map(|i| &x[i * d..(i + 1) * d]).collect();
+                    let rows: Vec<&[f64]> = (base + s..base + e)
+                        .map(|i| &x[i * d..(i + 1) * d])
+                        .collect();
                     sq_dists(&rows, panel, &mut buf);
                     for r in 0..e - s {
                         let (best, bd, sd) = two_nearest(&buf[r * kp..r * kp + k]);
@@ -172,10 +192,12 @@ impl<'a> State<'a> {
         self.t_upper.fill(0);
         self.t_lower.fill(0);
         // Every row gets its first label: report it as a change from "none" (u32::MAX).
-        (0..self.n as u32).map(|i| (i, u32::MAX, self.labels[i as usize])).collect()
+        (0..self.n as u32)
+            .map(|i| (i, u32::MAX, self.labels[i as usize]))
+            .collect()
     }
 
-    /// Later E-steps: bound tests, then batched scans of the rows that fail them.
+    /// Later E-steps: bound tests, then restricted scans of the rows that fail them.
     fn pruned_scan(&mut self) -> Vec<Change> {
         let (d, k, now, slack) = (self.d, self.k, self.now, self.slack);
         // Net displacement of every centre since each anchor still in the window, with the
@@ -203,14 +225,14 @@ impl<'a> State<'a> {
         }
         let half = self.half_separation();
 
-        // Phase 1: tests (and tightening of u) in parallel over fixed chunks. With few
-        // centres the rows that fail are compared with all of them right away; otherwise
-        // they are collected for the batched, restricted scan below.
+        // Pass 1 (parallel over fixed chunks): bound tests, tightening of u. Rows that still
+        // fail are collected; with few centres they are compared with all of them at once.
         let x = self.x;
         let centers = &self.centers;
         let panel = &self.panel;
         let direct = self.direct;
-        let phase1: Vec<(Vec<u32>, Vec<Change>)> = self
+        type Pass1 = (Vec<u32>, Vec<Change>, Vec<f64>);
+        let pass1: Vec<Pass1> = self
             .labels
             .par_chunks_mut(CHUNK)
             .zip(self.upper.par_chunks_mut(CHUNK))
@@ -219,30 +241,41 @@ impl<'a> State<'a> {
             .zip(self.t_lower.par_chunks_mut(CHUNK))
             .enumerate()
             .map(|(b, ((((lab, up), tu), lo), tl))| {
+                let base = b * CHUNK;
+                let row = |i: usize| &x[(base + i) * d..(base + i + 1) * d];
                 let mut scan = Vec::new();
+                // Largest u among the failing rows of each centre (restricted scans).
+                let mut umax = if direct { Vec::new() } else { vec![0.0f64; k] };
                 for i in 0..lab.len() {
                     let a = lab[i] as usize;
                     let (ta, tb) = (tu[i] as usize, tl[i] as usize);
-                    let ub = if ta == now { up[i] } else { up[i] + disp[(ta - lo_t) * k + a] };
+                    let ub = if ta == now {
+                        up[i]
+                    } else {
+                        up[i] + disp[(ta - lo_t) * k + a]
+                    };
                     let lb = if tb == now {
                         lo[i]
                     } else {
                         let (m1, a1, m2) = dmax[tb - lo_t];
                         lo[i] - if a == a1 { m2 } else { m1 }
                     };
-                    let m = half[a].max(lb);
+                    let h = half[a];
+                    let m = if lb > h { lb } else { h };
                     let mut tightened = false;
-                    if ub + slack >= m && direct {
-                        scan.push(i as u32);
-                        continue;
-                    }
                     if ub + slack >= m {
-                        let row = &x[(b * CHUNK + i) * d..(b * CHUNK + i + 1) * d];
-                        let u = sq_dist(row, &centers[a * d..(a + 1) * d]).sqrt();
+                        if direct {
+                            scan.push(i as u32);
+                            continue;
+                        }
+                        let u = sq_dist(row(i), &centers[a * d..(a + 1) * d]).sqrt();
                         up[i] = u;
                         tu[i] = now as u32;
                         if u + slack >= m {
                             scan.push(i as u32);
+                            if u > umax[a] {
+                                umax[a] = u;
+                            }
                             continue;
                         }
                         tightened = true;
@@ -260,21 +293,17 @@ impl<'a> State<'a> {
                     }
                 }
                 let mut changes = Vec::new();
-                DBG_SCAN.fetch_add(scan.len(), std::sync::atomic::Ordering::Relaxed);
                 if direct && !scan.is_empty() {
                     let kp = panel.kpad();
                     let mut buf = vec![0.0; GROUP.min(scan.len()) * kp];
                     for grp in scan.chunks(GROUP) {
-                        let rows: Vec<&[f64]> = grp
-                            .iter()
-                            .map(|&i| &x[(b * CHUNK + i as usize) * d..(b * CHUNK + i as usize + 1) * d])
-                            .collect();
+                        let rows: Vec<&[f64]> = grp.iter().map(|&i| row(i as usize)).collect();
                         sq_dists(&rows, panel, &mut buf);
                         for (r, &i) in grp.iter().enumerate() {
                             let i = i as usize;
                             let (best, bd, sd) = two_nearest(&buf[r * kp..r * kp + k]);
                             if best as u32 != lab[i] {
-                                changes.push(((b * CHUNK + i) as u32, lab[i], best as u32));
+                                changes.push(((base + i) as u32, lab[i], best as u32));
                                 lab[i] = best as u32;
                             }
                             up[i] = bd.sqrt();
@@ -285,86 +314,106 @@ impl<'a> State<'a> {
                     }
                     scan.clear();
                 }
-                for i in scan.iter_mut() {
-                    *i += (b * CHUNK) as u32;
-                }
-                (scan, changes)
+                (scan, changes, umax)
             })
             .collect();
         if direct {
-            return phase1.into_iter().flat_map(|(_, c)| c).collect();
+            return pass1.into_iter().flat_map(|(_, c, _)| c).collect();
         }
-        let scans: Vec<Vec<u32>> = phase1.into_iter().map(|(s, _)| s).collect();
 
-        // Phase 2: group the failing rows by centre, sort each group by u, and compare each
-        // batch with the centres within 2·max(u) of the group's centre.
-        let mut by_center: Vec<Vec<u32>> = vec![Vec::new(); k];
-        for &i in scans.iter().flatten() {
-            by_center[self.labels[i as usize] as usize].push(i);
-        }
-        let mut batches: Vec<(usize, Vec<u32>)> = Vec::new();
-        for (a, mut rows) in by_center.into_iter().enumerate() {
-            rows.sort_by(|&p, &q| {
-                self.upper[p as usize].total_cmp(&self.upper[q as usize]).then(p.cmp(&q))
-            });
-            for batch in rows.chunks(GROUP) {
-                batches.push((a, batch.to_vec()));
+        // Candidate centres of each centre a: those within 2·max(u) of it (any other centre
+        // is farther from every failing row of a than a itself), with their distances, in
+        // index order; `next[a]`: distance to the nearest centre left out.
+        let mut umax = vec![0.0f64; k];
+        for (_, _, um) in &pass1 {
+            for (m, &v) in umax.iter_mut().zip(um) {
+                if v > *m {
+                    *m = v;
+                }
             }
         }
-        let results: Vec<Vec<(u32, u32, f64, f64)>> = batches
-            .par_iter()
-            .map(|(a, rows)| self.scan_batch(*a, rows))
+        let kp = self.panel.kpad();
+        let cands: Vec<(Vec<(u32, f64)>, f64)> = (0..k)
+            .into_par_iter()
+            .with_min_len(8)
+            .map(|a| {
+                if umax[a] == 0.0 {
+                    return (Vec::new(), f64::INFINITY);
+                }
+                let radius = 2.0 * umax[a] + 2.0 * slack;
+                let mut buf = vec![0.0; kp];
+                sq_dists(&[&centers[a * d..(a + 1) * d]], &self.panel, &mut buf);
+                let mut list = Vec::new();
+                let mut next = f64::INFINITY;
+                for (j, &v) in buf[..k].iter().enumerate() {
+                    let dist = v.sqrt();
+                    if dist <= radius || j == a {
+                        list.push((j as u32, if j == a { 0.0 } else { dist }));
+                    } else if dist < next {
+                        next = dist;
+                    }
+                }
+                (list, next)
+            })
             .collect();
 
-        // Phase 3: write back, in batch order.
-        let mut changes = Vec::new();
-        for (i, label, u, l) in results.into_iter().flatten() {
-            let iu = i as usize;
-            let old = self.labels[iu];
-            if label != old {
-                changes.push((i, old, label));
-                self.labels[iu] = label;
-            }
-            self.upper[iu] = u;
-            self.lower[iu] = l;
-            self.t_upper[iu] = now as u32;
-            self.t_lower[iu] = now as u32;
-        }
-        changes
-    }
-
-    /// Rows `rows` (all labelled `a`, sorted by their exact distance `u` to centre `a`) against
-    /// the centres within `2·max(u)` of centre `a`. Returns `(row, label, u, l)`.
-    fn scan_batch(&self, a: usize, rows: &[u32]) -> Vec<(u32, u32, f64, f64)> {
-        let (d, k) = (self.d, self.k);
-        let umax = self.upper[*rows.last().expect("non-empty batch") as usize];
-        let radius = 2.0 * umax + 2.0 * self.slack;
-        let mut cc = vec![0.0; self.panel.kpad()];
-        sq_dists(&[&self.centers[a * d..(a + 1) * d]], &self.panel, &mut cc);
-        let mut cand = Vec::new();
-        let mut next = f64::INFINITY;
-        for (j, &v) in cc[..k].iter().enumerate() {
-            let dist = v.sqrt();
-            if dist <= radius || j == a {
-                cand.push(j);
-            } else {
-                next = next.min(dist);
-            }
-        }
-        let panel = Panel::from_rows(&self.centers, d, &cand);
-        let kp = panel.kpad();
-        let mut buf = vec![0.0; rows.len() * kp];
-        let rr: Vec<&[f64]> = rows.iter().map(|&i| self.row(i as usize)).collect();
-        sq_dists(&rr, &panel, &mut buf);
-        rows.iter()
+        // Pass 2 (parallel over the same chunks): each failing row against the candidates of
+        // its centre that lie within 2u of that centre.
+        let changes: Vec<Vec<Change>> = self
+            .labels
+            .par_chunks_mut(CHUNK)
+            .zip(self.upper.par_chunks_mut(CHUNK))
+            .zip(self.lower.par_chunks_mut(CHUNK))
+            .zip(self.t_lower.par_chunks_mut(CHUNK))
+            .zip(pass1.par_iter())
             .enumerate()
-            .map(|(r, &i)| {
-                let (best, bd, sd) = two_nearest(&buf[r * kp..r * kp + cand.len()]);
-                let u_old = self.upper[i as usize];
-                let l = sd.sqrt().min(next - u_old);
-                (i, cand[best] as u32, bd.sqrt(), l)
+            .map(|(b, ((((lab, up), lo), tl), (scan, _, _)))| {
+                let base = b * CHUNK;
+                let mut changes = Vec::new();
+                for (s, &i) in scan.iter().enumerate() {
+                    if let Some(&ahead) = scan.get(s + 4) {
+                        crate::sqdist::prefetch_row(
+                            &x[(base + ahead as usize) * d..(base + ahead as usize + 1) * d],
+                        );
+                    }
+                    let i = i as usize;
+                    let row = &x[(base + i) * d..(base + i + 1) * d];
+                    let a = lab[i] as usize;
+                    let u = up[i];
+                    let reach = 2.0 * u + 2.0 * slack;
+                    let (list, next_a) = &cands[a];
+                    let mut next = *next_a;
+                    let (mut best, mut bd, mut sd) = (u32::MAX, f64::INFINITY, f64::INFINITY);
+                    for &(j, dist) in list {
+                        if dist > reach {
+                            if dist < next {
+                                next = dist;
+                            }
+                            continue;
+                        }
+                        let ju = j as usize;
+                        let v = sq_dist(row, &centers[ju * d..(ju + 1) * d]);
+                        if v < bd {
+                            sd = bd;
+                            bd = v;
+                            best = j;
+                        } else if v < sd {
+                            sd = v;
+                        }
+                    }
+                    if best != lab[i] {
+                        changes.push(((base + i) as u32, lab[i], best));
+                        lab[i] = best;
+                    }
+                    let l = sd.sqrt().min(next - u);
+                    up[i] = bd.sqrt();
+                    lo[i] = l;
+                    tl[i] = now as u32;
+                }
+                changes
             })
-            .collect()
+            .collect();
+        changes.into_iter().flatten().collect()
     }
 
     /// `0.5 × min_{j' ≠ j} ‖c_j - c_j'‖` for every centre (`+inf` when k = 1).
@@ -399,12 +448,17 @@ impl<'a> State<'a> {
                 }
                 let row = self.row(i as usize);
                 let (o, nw) = (old as usize, new as usize);
-                let (s_o, c_o) = (&mut self.sums[o * d..(o + 1) * d], &mut self.comp[o * d..(o + 1) * d]);
+                let (s_o, c_o) = (
+                    &mut self.sums[o * d..(o + 1) * d],
+                    &mut self.comp[o * d..(o + 1) * d],
+                );
                 for ((s, c), &v) in s_o.iter_mut().zip(c_o.iter_mut()).zip(row) {
                     two_sum(s, c, -v);
                 }
-                let (s_n, c_n) =
-                    (&mut self.sums[nw * d..(nw + 1) * d], &mut self.comp[nw * d..(nw + 1) * d]);
+                let (s_n, c_n) = (
+                    &mut self.sums[nw * d..(nw + 1) * d],
+                    &mut self.comp[nw * d..(nw + 1) * d],
+                );
                 for ((s, c), &v) in s_n.iter_mut().zip(c_n.iter_mut()).zip(row) {
                     two_sum(s, c, v);
                 }
@@ -414,7 +468,12 @@ impl<'a> State<'a> {
         }
         // Totals used for this M-step (a copy: re-seeding empty clusters must not leak into
         // the label-consistent running sums).
-        let mut totals: Vec<f64> = self.sums.iter().zip(&self.comp).map(|(s, c)| s + c).collect();
+        let mut totals: Vec<f64> = self
+            .sums
+            .iter()
+            .zip(&self.comp)
+            .map(|(s, c)| s + c)
+            .collect();
         let mut counts = self.counts.clone();
         if counts.contains(&0) {
             self.relocate_empty(&mut totals, &mut counts);
@@ -452,7 +511,10 @@ impl<'a> State<'a> {
                 for (i, &l) in lab.iter().enumerate() {
                     let l = l as usize;
                     let r = &x[(b * rows + i) * d..(b * rows + i + 1) * d];
-                    s[l * d..(l + 1) * d].iter_mut().zip(r).for_each(|(a, v)| *a += v);
+                    s[l * d..(l + 1) * d]
+                        .iter_mut()
+                        .zip(r)
+                        .for_each(|(a, v)| *a += v);
                     c[l] += 1;
                 }
                 (s, c)

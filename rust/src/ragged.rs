@@ -79,6 +79,9 @@ mod tests {
             trial_bounds(&[0, -1], 5),
             Err(Error::InvalidArgument(_))
         ));
-        assert!(matches!(trial_bounds(&[0], 0), Err(Error::InvalidArgument(_))));
+        assert!(matches!(
+            trial_bounds(&[0], 0),
+            Err(Error::InvalidArgument(_))
+        ));
     }
 }

@@ -74,55 +74,161 @@ pub fn resample_segments(
     n: usize,
 ) -> Result<Vec<f64>> {
     check(values, channels, starts, ends, n)?;
-    let frames = values.len() / channels;
     let row = channels * n;
     let mut out = crate::buffer::zeroed_f64(starts.len() * row);
+    let kernel = pick_kernel(channels);
     out.par_chunks_mut(row * SEGMENTS_PER_TASK)
         .enumerate()
         .for_each(|(k, chunk)| {
-            for (j, dst) in chunk.chunks_exact_mut(row).enumerate() {
-                let s = k * SEGMENTS_PER_TASK + j;
-                resample_one(values, channels, frames, starts[s], ends[s], n, dst);
-            }
+            let first = k * SEGMENTS_PER_TASK;
+            let count = chunk.len() / row;
+            kernel(
+                values,
+                channels,
+                &starts[first..first + count],
+                &ends[first..first + count],
+                n,
+                chunk,
+            );
         });
     Ok(out)
 }
 
-/// One segment into `dst` (`channels * n`).
-#[inline]
-fn resample_one(
+/// Point `k` of a segment is `numpy.linspace(start, end, n)[k]` (`k * step + start`, the
+/// last exactly `end`); on the frame grid 0, 1, ..., frames - 1 it falls in `[j, j + 1]`, `j =
+/// min(floor(x), frames - 2)`. Returns `(j, x - j)`; the fraction is exactly 1 only for a point
+/// on the last frame.
+#[inline(always)]
+fn locate(k: usize, n: usize, start: f64, step: f64, end: f64, frames: usize) -> (usize, f64) {
+    let x = if k == n - 1 {
+        end
+    } else {
+        k as f64 * step + start
+    };
+    // `x` is in [0, frames - 1] (checked by `check`); `as` saturates anyway.
+    let j = (x as usize).min(frames - 2);
+    (j, x - j as f64)
+}
+
+/// Resamples segments into consecutive rows of `dst` (`C * n` each) for `C` channels known at
+/// compile time: each point interpolates the `C` channels of two frames together into a
+/// point-major scratch block, transposed to the channel-major row at the end. Each channel gets
+/// numpy.interp's `(fp[j + 1] - fp[j]) * frac + fp[j]`; a point on the last frame takes that
+/// frame's value exactly.
+#[inline(always)]
+fn resample_rows<const C: usize>(
     values: &[f64],
-    channels: usize,
-    frames: usize,
-    start: f64,
-    end: f64,
+    starts: &[f64],
+    ends: &[f64],
     n: usize,
     dst: &mut [f64],
 ) {
-    let step = (end - start) / (n - 1) as f64;
-    for k in 0..n {
-        // numpy.linspace: k * step + start, the last point exactly `end`.
-        let x = if k == n - 1 {
-            end
-        } else {
-            k as f64 * step + start
-        };
-        // numpy.interp on the grid 0, 1, ..., frames - 1: j = floor(x),
-        // value = (fp[j + 1] - fp[j]) * (x - j) + fp[j]; x == frames - 1 gives fp[last].
-        let j = (x as usize).min(frames - 1);
-        let row = &values[j * channels..(j + 1) * channels];
-        if j == frames - 1 {
-            for (c, &v) in row.iter().enumerate() {
-                dst[c * n + k] = v;
+    let frames = values.len() / C;
+    assert!(C >= 1 && n >= 2 && frames >= 2 && values.len() == frames * C);
+    assert!(dst.len() == starts.len() * C * n && starts.len() == ends.len());
+    // SAFETY: `[f64; C]` has the layout of `C` consecutive `f64` (same alignment), and
+    // `values` holds exactly `frames * C` of them.
+    let rows: &[[f64; C]] =
+        unsafe { std::slice::from_raw_parts(values.as_ptr().cast::<[f64; C]>(), frames) };
+    let mut tmp = vec![[0.0f64; C]; n];
+    for ((&start, &end), out) in starts.iter().zip(ends).zip(dst.chunks_exact_mut(C * n)) {
+        let step = (end - start) / (n - 1) as f64;
+        for (k, r) in tmp.iter_mut().enumerate() {
+            let (j, frac) = locate(k, n, start, step, end, frames);
+            let (lo, hi) = (rows[j], rows[j + 1]);
+            *r = std::array::from_fn(|c| (hi[c] - lo[c]) * frac + lo[c]);
+            if frac == 1.0 {
+                *r = hi;
             }
-        } else {
-            let frac = x - j as f64;
-            let next = &values[(j + 1) * channels..(j + 2) * channels];
-            for c in 0..channels {
-                dst[c * n + k] = (next[c] - row[c]) * frac + row[c];
+        }
+        for (c, o) in out.chunks_exact_mut(n).enumerate() {
+            for (v, r) in o.iter_mut().zip(&tmp) {
+                *v = r[c];
             }
         }
     }
+}
+
+/// [`resample_rows`] for any number of channels.
+fn resample_rows_any(
+    values: &[f64],
+    channels: usize,
+    starts: &[f64],
+    ends: &[f64],
+    n: usize,
+    dst: &mut [f64],
+) {
+    let ch = channels;
+    let frames = values.len() / ch;
+    assert!(ch >= 1 && n >= 2 && frames >= 2 && dst.len() == starts.len() * ch * n);
+    for ((&start, &end), out) in starts.iter().zip(ends).zip(dst.chunks_exact_mut(ch * n)) {
+        let step = (end - start) / (n - 1) as f64;
+        for k in 0..n {
+            let (j, frac) = locate(k, n, start, step, end, frames);
+            let lo = &values[j * ch..j * ch + ch];
+            let hi = &values[j * ch + ch..j * ch + 2 * ch];
+            for c in 0..ch {
+                out[c * n + k] = if frac == 1.0 {
+                    hi[c]
+                } else {
+                    (hi[c] - lo[c]) * frac + lo[c]
+                };
+            }
+        }
+    }
+}
+
+type Kernel = fn(&[f64], usize, &[f64], &[f64], usize, &mut [f64]);
+
+macro_rules! kernels {
+    ($name:ident, $($feature:literal)?) => {
+        /// [`resample_rows`] for 1, 2, 3, 4, 6, 8 or any number of channels.
+        $(#[target_feature(enable = $feature)])?
+        fn $name(
+            values: &[f64],
+            channels: usize,
+            starts: &[f64],
+            ends: &[f64],
+            n: usize,
+            dst: &mut [f64],
+        ) {
+            match channels {
+                1 => resample_rows::<1>(values, starts, ends, n, dst),
+                2 => resample_rows::<2>(values, starts, ends, n, dst),
+                3 => resample_rows::<3>(values, starts, ends, n, dst),
+                4 => resample_rows::<4>(values, starts, ends, n, dst),
+                6 => resample_rows::<6>(values, starts, ends, n, dst),
+                8 => resample_rows::<8>(values, starts, ends, n, dst),
+                _ => resample_rows_any(values, channels, starts, ends, n, dst),
+            }
+        }
+    };
+}
+
+kernels!(rows_portable,);
+#[cfg(target_arch = "x86_64")]
+kernels!(rows_avx2, "avx2,fma");
+#[cfg(target_arch = "x86_64")]
+kernels!(rows_avx512, "avx512f,avx512vl,avx2,fma");
+
+/// The widest build this CPU runs (chosen at run time). The arithmetic is identical in all:
+/// `x * y + z` is never contracted to a fused multiply-add by Rust.
+fn pick_kernel(_channels: usize) -> Kernel {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f")
+            && std::arch::is_x86_feature_detected!("avx512vl")
+        {
+            // SAFETY: the CPU has the features the function was compiled for.
+            return |v, c, s, e, n, d| unsafe { rows_avx512(v, c, s, e, n, d) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: as above.
+            return |v, c, s, e, n, d| unsafe { rows_avx2(v, c, s, e, n, d) };
+        }
+    }
+    rows_portable
 }
 
 #[cfg(test)]
@@ -132,7 +238,9 @@ mod tests {
     #[test]
     fn linear_signal_is_resampled_exactly() {
         // channel 0: 2 t, channel 1: 10 - t over 6 frames.
-        let values: Vec<f64> = (0..6).flat_map(|t| [2.0 * t as f64, 10.0 - t as f64]).collect();
+        let values: Vec<f64> = (0..6)
+            .flat_map(|t| [2.0 * t as f64, 10.0 - t as f64])
+            .collect();
         let out = resample_segments(&values, 2, &[0.5, 0.0], &[4.5, 5.0], 5).unwrap();
         assert_eq!(out.len(), 2 * 10);
         // segment 0 points 0.5, 1.5, 2.5, 3.5, 4.5

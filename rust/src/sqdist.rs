@@ -53,11 +53,10 @@ pub fn available_levels() -> Vec<Level> {
 }
 
 fn supported(level: Level) -> bool {
-    match (level, detected_level()) {
-        (Level::Scalar, _) | (_, Level::Avx512) => true,
-        (Level::Avx2, Level::Avx2) => true,
-        _ => false,
-    }
+    matches!(
+        (level, detected_level()),
+        (Level::Scalar, _) | (_, Level::Avx512) | (Level::Avx2, Level::Avx2)
+    )
 }
 
 /// `k` centres of dimension `d`, transposed and zero-padded to `kpad` columns.
@@ -72,7 +71,12 @@ pub struct Panel {
 impl Panel {
     /// Panel of the row-major `k × d` matrix `centers`.
     pub fn from_centers(centers: &[f64], k: usize, d: usize) -> Self {
-        let mut p = Self { d, k: 0, kpad: 0, data: Vec::new() };
+        let mut p = Self {
+            d,
+            k: 0,
+            kpad: 0,
+            data: Vec::new(),
+        };
         p.set(centers, k);
         p
     }
@@ -132,8 +136,14 @@ pub fn sq_dists(rows: &[&[f64]], panel: &Panel, out: &mut [f64]) {
 pub fn sq_dists_at(level: Level, rows: &[&[f64]], panel: &Panel, out: &mut [f64]) {
     let (d, kpad) = (panel.d, panel.kpad);
     assert!(out.len() >= rows.len() * kpad, "output buffer too small");
-    assert!(rows.iter().all(|r| r.len() >= d), "row shorter than the panel dimension");
-    assert!(supported(level), "instruction set {level:?} not available on this CPU");
+    assert!(
+        rows.iter().all(|r| r.len() >= d),
+        "row shorter than the panel dimension"
+    );
+    assert!(
+        supported(level),
+        "instruction set {level:?} not available on this CPU"
+    );
     match level {
         Level::Scalar => scalar_dists(rows, panel, out),
         #[cfg(target_arch = "x86_64")]
@@ -232,13 +242,12 @@ fn blocked<const P: usize>(
 ) {
     let full = rows.len() / P;
     // Rows are often gathered from scattered places: prefetch a few blocks ahead.
-    static AH: OnceLock<usize> = OnceLock::new();
-    let ahead: usize = *AH.get_or_init(|| std::env::var("AHEAD").ok().and_then(|v| v.parse().ok()).unwrap_or(4));
-    for r in rows.iter().take(ahead * P) {
+    const AHEAD: usize = 4;
+    for r in rows.iter().take(AHEAD * P) {
         prefetch_row(r);
     }
     for b in 0..full {
-        for r in rows.iter().skip((b + ahead) * P).take(P) {
+        for r in rows.iter().skip((b + AHEAD) * P).take(P) {
             prefetch_row(r);
         }
         let ptrs: [*const f64; P] = std::array::from_fn(|p| rows[b * P + p].as_ptr());
@@ -393,11 +402,15 @@ mod x86 {
         // value is the smallest of the lanes' seconds and of the other lanes' bests.
         let bmin = _mm512_reduce_min_pd(best);
         let at_min = _mm512_cmp_pd_mask::<_CMP_EQ_OQ>(best, _mm512_set1_pd(bmin));
-        let imin = _mm512_reduce_min_epi64(_mm512_mask_mov_epi64(_mm512_set1_epi64(i64::MAX), at_min, idx));
+        let imin = _mm512_reduce_min_epi64(_mm512_mask_mov_epi64(
+            _mm512_set1_epi64(i64::MAX),
+            at_min,
+            idx,
+        ));
         let lane = _mm512_cmpeq_epi64_mask(idx, _mm512_set1_epi64(imin)) & at_min;
         let others = _mm512_mask_mov_pd(best, lane, inf);
         let sec = _mm512_reduce_min_pd(_mm512_min_pd(second, others));
-        return (imin as usize, bmin, sec);
+        (imin as usize, bmin, sec)
     }
 
     /// # Safety
@@ -456,7 +469,9 @@ mod tests {
         let mut s = seed;
         (0..n)
             .map(|_| {
-                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
                 (s >> 11) as f64 / (1u64 << 53) as f64 * 4.0 - 2.0
             })
             .collect()
@@ -477,7 +492,13 @@ mod tests {
 
     #[test]
     fn every_level_gives_the_same_bits_as_a_sequential_fma_chain() {
-        for &(n, k, d) in &[(1usize, 1usize, 1usize), (7, 8, 3), (13, 17, 30), (9, 40, 5), (6, 5, 64)] {
+        for &(n, k, d) in &[
+            (1usize, 1usize, 1usize),
+            (7, 8, 3),
+            (13, 17, 30),
+            (9, 40, 5),
+            (6, 5, 64),
+        ] {
             let x = values(n * d, 1 + n as u64);
             let c = values(k * d, 99 + k as u64);
             let panel = Panel::from_centers(&c, k, d);
@@ -493,7 +514,11 @@ mod tests {
                             let diff = x[i * d + t] - c[j * d + t];
                             acc = diff.mul_add(diff, acc);
                         }
-                        assert_eq!(out[i * kp + j].to_bits(), acc.to_bits(), "{level:?} {i} {j}");
+                        assert_eq!(
+                            out[i * kp + j].to_bits(),
+                            acc.to_bits(),
+                            "{level:?} {i} {j}"
+                        );
                     }
                     let direct = sq_dist(&x[i * d..(i + 1) * d], &c[..d]);
                     assert!((direct - out[i * kp]).abs() <= 1e-12 * direct.max(1.0));
@@ -511,13 +536,19 @@ mod tests {
                     best = j;
                 }
             }
-            let second = (0..v.len()).filter(|&j| j != best).map(|j| v[j]).fold(f64::INFINITY, f64::min);
+            let second = (0..v.len())
+                .filter(|&j| j != best)
+                .map(|j| v[j])
+                .fold(f64::INFINITY, f64::min);
             (best, v[best], second)
         };
         for len in [1usize, 2, 7, 8, 9, 16, 17, 33, 176] {
             for seed in 0..20u64 {
                 // Few distinct values: many ties, including ties for the minimum.
-                let v: Vec<f64> = values(len, seed * 31 + len as u64).iter().map(|x| (x * 3.0).round()).collect();
+                let v: Vec<f64> = values(len, seed * 31 + len as u64)
+                    .iter()
+                    .map(|x| (x * 3.0).round())
+                    .collect();
                 assert_eq!(two_nearest(&v), reference(&v), "{v:?}");
             }
         }

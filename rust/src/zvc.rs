@@ -46,81 +46,151 @@ fn interp(p: impl Fn(usize) -> f64, i0: usize, frac: f64) -> f64 {
     }
 }
 
-/// Crossings of one channel of one trial (`vel(t)`, `pos(t)` for `t in 0..len`), appended to
-/// `out` as fractional frames.
-fn scan_channel(
-    len: usize,
-    vel: impl Fn(usize) -> f64,
-    pos: impl Fn(usize) -> f64,
-    min_change: f64,
-    out: &mut Vec<f64>,
-) {
-    let mut reference = pos(0);
-    let mut last: Option<(usize, f64)> = None;
-    for t in 0..len {
-        let v = vel(t);
-        if v == 0.0 {
-            continue;
+/// Whether every value is finite. Eight independent accumulators of `v * 0` (NaN for NaN or
+/// infinity, else 0) keep the loop branch-free and vectorised.
+fn all_finite(x: &[f64]) -> bool {
+    let mut acc = [0.0f64; 8];
+    let mut chunks = x.chunks_exact(8);
+    for c in &mut chunks {
+        for k in 0..8 {
+            acc[k] += c[k] * 0.0;
         }
-        if let Some((a, va)) = last {
-            if (va > 0.0) != (v > 0.0) {
-                let (i0, frac) = if t == a + 1 {
-                    (a, va / (va - v))
-                } else {
-                    ((a + t) / 2, if (a + t) % 2 == 1 { 0.5 } else { 0.0 })
-                };
-                let at = interp(&pos, i0, frac);
-                if min_change == 0.0 || (at - reference).abs() > min_change {
-                    out.push(i0 as f64 + frac);
-                    reference = at;
-                }
-            }
-        }
-        last = Some((t, v));
     }
+    let tail = chunks.remainder().iter().fold(0.0, |a, v| a + v * 0.0);
+    acc.iter().sum::<f64>() + tail == 0.0
 }
 
-/// Crossings of every channel of one trial spanning frames `s..e` of a corpus with `channels`
-/// columns.
-#[allow(clippy::too_many_arguments)]
+/// Per-channel state of the scan of one trial.
+#[derive(Clone, Copy, Default)]
+struct ChannelState {
+    /// Last non-zero sample `(frame, value)` before the current run of zeros.
+    last_nonzero: Option<(usize, f64)>,
+    /// Position of the significant-movement reference (frame 0, then the last kept crossing).
+    reference: f64,
+}
+
+/// Reusable per-task buffers.
+#[derive(Default)]
+struct Scratch {
+    cum: Vec<f64>,
+    state: Vec<ChannelState>,
+    per_channel: Vec<Vec<f64>>,
+}
+
+/// Crossings of every channel of one trial: `vel` and `pos` are the trial's `(len, channels)`
+/// rows. Crossings are appended to `out` channel by channel. Returns false (and appends
+/// nothing) if `vel` or `pos` holds NaN or infinity.
+///
+/// Most consecutive samples have the same sign; a vectorisable pass flags the others
+/// (`!(v[t - 1] * v[t] > 0)`: a sign change, a zero, or an underflowing product) and only the
+/// flagged samples run the exact rules.
 fn scan_trial(
-    velocity: &[f64],
-    positions: Option<&[f64]>,
+    vel: &[f64],
+    pos: Option<&[f64]>,
     channels: usize,
-    s: usize,
-    e: usize,
     min_change: f64,
     trial: i64,
-    cum: &mut Vec<f64>,
+    scratch: &mut Scratch,
     out: &mut Crossings,
-) {
-    let len = e - s;
-    for c in 0..channels {
-        let vel = |t: usize| velocity[(s + t) * channels + c];
-        let before = out.frame.len();
-        match positions {
-            Some(p) => scan_channel(
-                len,
-                vel,
-                |t| p[(s + t) * channels + c],
-                min_change,
-                &mut out.frame,
-            ),
-            None => {
-                cum.clear();
-                let mut acc = 0.0;
-                cum.extend((0..len).map(|t| {
-                    acc += vel(t);
-                    acc
-                }));
-                let cum: &[f64] = cum;
-                scan_channel(len, vel, |t| cum[t], min_change, &mut out.frame);
-            }
-        }
-        let added = out.frame.len() - before;
-        out.channel.extend(std::iter::repeat_n(c as i64, added));
-        out.trial.extend(std::iter::repeat_n(trial, added));
+) -> bool {
+    let c_n = channels;
+    if !all_finite(vel) || !pos.is_none_or(all_finite) {
+        return false;
     }
+    let pos: &[f64] = match pos {
+        Some(p) => p,
+        None => {
+            // Running sum per channel, restarting at the trial's first frame.
+            let cum = &mut scratch.cum;
+            cum.clear();
+            cum.resize(vel.len(), 0.0);
+            if c_n <= 8 {
+                // Sums kept in registers: one add per value, the channels in parallel.
+                let mut acc = [0.0f64; 8];
+                for (row, out) in vel.chunks_exact(c_n).zip(cum.chunks_exact_mut(c_n)) {
+                    for c in 0..c_n {
+                        acc[c] += row[c];
+                        out[c] = acc[c];
+                    }
+                }
+            } else {
+                cum[..c_n].copy_from_slice(&vel[..c_n]);
+                for i in c_n..vel.len() {
+                    cum[i] = cum[i - c_n] + vel[i];
+                }
+            }
+            &scratch.cum
+        }
+    };
+    scratch.state.clear();
+    scratch.state.extend((0..c_n).map(|c| ChannelState {
+        last_nonzero: None,
+        reference: pos[c],
+    }));
+    scratch.per_channel.resize_with(c_n, Vec::new);
+    for list in &mut scratch.per_channel {
+        list.clear();
+    }
+    let state = &mut scratch.state;
+    let lists = &mut scratch.per_channel;
+    let mut handle = |i: usize| {
+        let (t, c) = (i / c_n, i % c_n);
+        let (p, q) = (vel[i - c_n], vel[i]);
+        let st = &mut state[c];
+        let (i0, frac) = if q == 0.0 {
+            if p != 0.0 {
+                st.last_nonzero = Some((t - 1, p));
+            }
+            return;
+        } else if p != 0.0 {
+            if (p > 0.0) == (q > 0.0) {
+                return; // same sign: the product underflowed
+            }
+            (t - 1, p / (p - q))
+        } else {
+            // The end of a run of zeros.
+            match st.last_nonzero {
+                Some((a, va)) if (va > 0.0) != (q > 0.0) => {
+                    ((a + t) / 2, if (a + t) % 2 == 1 { 0.5 } else { 0.0 })
+                }
+                _ => return,
+            }
+        };
+        let at = interp(|f| pos[f * c_n + c], i0, frac);
+        if min_change == 0.0 || (at - st.reference).abs() > min_change {
+            lists[c].push(i0 as f64 + frac);
+            st.reference = at;
+        }
+    };
+    const CHUNK: usize = 8;
+    let n = vel.len();
+    let mut i = c_n;
+    while i + CHUNK <= n {
+        let cur: &[f64; CHUNK] = vel[i..i + CHUNK].try_into().expect("chunk");
+        let prev: &[f64; CHUNK] = vel[i - c_n..i - c_n + CHUNK].try_into().expect("chunk");
+        let mut mask = 0u32;
+        for k in 0..CHUNK {
+            mask |= ((!(cur[k] * prev[k] > 0.0)) as u32) << k;
+        }
+        while mask != 0 {
+            handle(i + mask.trailing_zeros() as usize);
+            mask &= mask - 1;
+        }
+        i += CHUNK;
+    }
+    while i < n {
+        if !(vel[i] * vel[i - c_n] > 0.0) {
+            handle(i);
+        }
+        i += 1;
+    }
+    for (c, list) in scratch.per_channel.iter().enumerate() {
+        out.frame.extend_from_slice(list);
+        out.channel
+            .extend(std::iter::repeat_n(c as i64, list.len()));
+        out.trial.extend(std::iter::repeat_n(trial, list.len()));
+    }
+    true
 }
 
 fn check_inputs(
@@ -145,13 +215,6 @@ fn check_inputs(
             "min_change must be a finite number >= 0, got {min_change}"
         )));
     }
-    if let Some(i) = first_non_finite(velocity) {
-        return Err(Error::NonFinite(format!(
-            "velocity contains NaN or infinity (frame {}, channel {})",
-            i / channels,
-            i % channels
-        )));
-    }
     if let Some(p) = positions {
         if p.len() != velocity.len() {
             return Err(Error::Shape(format!(
@@ -161,15 +224,26 @@ fn check_inputs(
                 p.len()
             )));
         }
-        if let Some(i) = first_non_finite(p) {
-            return Err(Error::NonFinite(format!(
-                "positions contains NaN or infinity (frame {}, channel {})",
-                i / channels,
-                i % channels
-            )));
-        }
     }
     Ok(velocity.len() / channels)
+}
+
+/// The error for the first NaN or infinity of `velocity`, else of `positions`.
+fn non_finite_error(velocity: &[f64], positions: Option<&[f64]>, channels: usize) -> Error {
+    let (name, i) = match first_non_finite(velocity) {
+        Some(i) => ("velocity", i),
+        None => (
+            "positions",
+            positions
+                .and_then(first_non_finite)
+                .expect("a non-finite value was seen"),
+        ),
+    };
+    Error::NonFinite(format!(
+        "{name} contains NaN or infinity (frame {}, channel {})",
+        i / channels,
+        i % channels
+    ))
 }
 
 /// Zero-velocity crossings of a `(frames, channels)` signal (row-major). Returns the fractional
@@ -181,13 +255,8 @@ pub fn zero_velocity_crossings(
     min_change: f64,
     positions: Option<&[f64]>,
 ) -> Result<(Vec<f64>, Vec<i64>)> {
-    let frames = check_inputs(velocity, channels, min_change, positions)?;
-    let mut out = Crossings::default();
-    let mut cum = Vec::new();
-    scan_trial(
-        velocity, positions, channels, 0, frames, min_change, 0, &mut cum, &mut out,
-    );
-    Ok((out.frame, out.channel))
+    let c = zero_velocity_crossings_ragged(velocity, channels, &[0], min_change, positions)?;
+    Ok((c.frame, c.channel))
 }
 
 /// Trials per parallel task.
@@ -196,7 +265,7 @@ const TRIALS_PER_TASK: usize = 64;
 /// Zero-velocity crossings of every trial of a ragged corpus (`velocity` `(total_frames,
 /// channels)` row-major, `offsets` the first frame of each trial). Frames are relative to each
 /// trial's first frame; the reference position of the significant-movement test restarts at
-/// each trial's frame 0.
+/// each trial's frame 0, and so does the default running-sum position.
 pub fn zero_velocity_crossings_ragged(
     velocity: &[f64],
     channels: usize,
@@ -206,28 +275,41 @@ pub fn zero_velocity_crossings_ragged(
 ) -> Result<Crossings> {
     let frames = check_inputs(velocity, channels, min_change, positions)?;
     let bounds = trial_bounds(offsets, frames)?;
-    let parts: Vec<Crossings> = bounds
+    let parts: Vec<Option<Crossings>> = bounds
         .par_chunks(TRIALS_PER_TASK)
         .enumerate()
         .map(|(k, chunk)| {
             let mut out = Crossings::default();
-            let mut cum = Vec::new();
+            let mut scratch = Scratch::default();
             for (j, &(s, e)) in chunk.iter().enumerate() {
                 let trial = (k * TRIALS_PER_TASK + j) as i64;
-                scan_trial(
-                    velocity, positions, channels, s, e, min_change, trial, &mut cum, &mut out,
-                );
+                let (a, b) = (s * channels, e * channels);
+                let pos = positions.map(|p| &p[a..b]);
+                if !scan_trial(
+                    &velocity[a..b],
+                    pos,
+                    channels,
+                    min_change,
+                    trial,
+                    &mut scratch,
+                    &mut out,
+                ) {
+                    return None;
+                }
             }
-            out
+            Some(out)
         })
         .collect();
-    let n: usize = parts.iter().map(|p| p.frame.len()).sum();
+    if parts.iter().any(Option::is_none) {
+        return Err(non_finite_error(velocity, positions, channels));
+    }
+    let n: usize = parts.iter().flatten().map(|p| p.frame.len()).sum();
     let mut all = Crossings {
         trial: Vec::with_capacity(n),
         channel: Vec::with_capacity(n),
         frame: Vec::with_capacity(n),
     };
-    for p in parts {
+    for p in parts.into_iter().flatten() {
         all.trial.extend(p.trial);
         all.channel.extend(p.channel);
         all.frame.extend(p.frame);
@@ -239,6 +321,90 @@ pub fn zero_velocity_crossings_ragged(
 mod tests {
     use super::*;
 
+    /// The rules of the module documentation, one channel at a time, written plainly: the
+    /// reference of the flagged scan.
+    fn reference(
+        v: &[f64],
+        channels: usize,
+        min_change: f64,
+        p: Option<&[f64]>,
+    ) -> Vec<(i64, f64)> {
+        let frames = v.len() / channels;
+        let mut out = Vec::new();
+        for c in 0..channels {
+            let vel = |t: usize| v[t * channels + c];
+            let cum: Vec<f64> = (0..frames)
+                .scan(0.0, |acc, t| {
+                    *acc += vel(t);
+                    Some(*acc)
+                })
+                .collect();
+            let pos = |t: usize| p.map_or(cum[t], |p| p[t * channels + c]);
+            let mut reference = pos(0);
+            let mut last: Option<(usize, f64)> = None;
+            for t in 0..frames {
+                let x = vel(t);
+                if x == 0.0 {
+                    continue;
+                }
+                if let Some((a, va)) = last {
+                    if (va > 0.0) != (x > 0.0) {
+                        let (i0, frac) = if t == a + 1 {
+                            (a, va / (va - x))
+                        } else {
+                            ((a + t) / 2, if (a + t) % 2 == 1 { 0.5 } else { 0.0 })
+                        };
+                        let at = interp(pos, i0, frac);
+                        if min_change == 0.0 || (at - reference).abs() > min_change {
+                            out.push((c as i64, i0 as f64 + frac));
+                            reference = at;
+                        }
+                    }
+                }
+                last = Some((t, x));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn flagged_scan_matches_the_plain_rules() {
+        // Pseudo-random velocities with many exact zeros, tiny values whose products
+        // underflow, and sign changes; 1 to 5 channels; with and without positions.
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            (state >> 33) as f64 / (1u64 << 31) as f64
+        };
+        for case in 0..300 {
+            let channels = 1 + case % 5;
+            let frames = 1 + (case * 7) % 40;
+            let v: Vec<f64> = (0..frames * channels)
+                .map(|_| {
+                    let r = next();
+                    if r < 0.25 {
+                        0.0
+                    } else if r < 0.35 {
+                        (next() - 0.5) * 1e-200
+                    } else {
+                        next() - 0.5
+                    }
+                })
+                .collect();
+            let p: Vec<f64> = (0..frames * channels).map(|_| next() * 3.0).collect();
+            for &min_change in &[0.0, 0.05, 0.5] {
+                for pos in [None, Some(&p[..])] {
+                    let (frames_got, chans_got) =
+                        zero_velocity_crossings(&v, channels, min_change, pos).unwrap();
+                    let got: Vec<(i64, f64)> = chans_got.into_iter().zip(frames_got).collect();
+                    assert_eq!(got, reference(&v, channels, min_change, pos), "case {case}");
+                }
+            }
+        }
+    }
+
     fn one(v: &[f64], min_change: f64, p: Option<&[f64]>) -> Vec<f64> {
         zero_velocity_crossings(v, 1, min_change, p).unwrap().0
     }
@@ -248,7 +414,10 @@ mod tests {
         // v goes 1 -> -3 between frames 1 and 2: root at 1 + 1/4.
         assert_eq!(one(&[2.0, 1.0, -3.0, -1.0], 0.0, None), vec![1.25]);
         // and back up between frames 3 and 4: -1 -> 1, root at 3.5.
-        assert_eq!(one(&[2.0, 1.0, -3.0, -1.0, 1.0], 0.0, None), vec![1.25, 3.5]);
+        assert_eq!(
+            one(&[2.0, 1.0, -3.0, -1.0, 1.0], 0.0, None),
+            vec![1.25, 3.5]
+        );
     }
 
     #[test]

@@ -60,7 +60,9 @@ fn as_ndarray<'a, 'py>(
             .name()
             .map(|n| n.to_string())
             .unwrap_or_else(|_| "?".into());
-        PyTypeError::new_err(format!("{name} must be a numpy.ndarray of {what}, got {ty}"))
+        PyTypeError::new_err(format!(
+            "{name} must be a numpy.ndarray of {what}, got {ty}"
+        ))
     })
 }
 
@@ -154,7 +156,11 @@ fn frames_channels(shape: &[usize]) -> (usize, usize) {
 /// Low-pass Butterworth design as second-order sections, `(n_sections, 6)`, equal to
 /// `scipy.signal.butter(order, cutoff, output="sos")`.
 #[pyfunction]
-fn butter_sos<'py>(py: Python<'py>, order: i64, cutoff: f64) -> PyResult<Bound<'py, PyArray2<f64>>> {
+fn butter_sos<'py>(
+    py: Python<'py>,
+    order: i64,
+    cutoff: f64,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     if order < 1 {
         return Err(PyValueError::new_err(format!(
             "order must be an integer >= 1, got {order}"
@@ -293,9 +299,8 @@ fn zero_velocity_crossings_ragged<'py>(
     let vel: &[f64] = &vel;
     let pos = p.as_ref().map(|p| p.values());
     let pos: Option<&[f64]> = pos.as_deref();
-    let c = py.detach(|| {
-        zvc::zero_velocity_crossings_ragged(vel, channels, &offsets, min_change, pos)
-    })?;
+    let c = py
+        .detach(|| zvc::zero_velocity_crossings_ragged(vel, channels, &offsets, min_change, pos))?;
     Ok((
         c.trial.into_pyarray(py),
         c.channel.into_pyarray(py),
