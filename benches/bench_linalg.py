@@ -20,7 +20,6 @@ from typing import Any
 
 import numpy as np
 from _harness import Table, median_time
-
 from visprim import kernels as K
 
 KS = (10, 30, 100, 170)
@@ -100,10 +99,20 @@ def bench_kmeans(table: Table, quick: bool) -> None:
         mi_ours = statistics.fmean(ours_inertia)
         mi_ref = statistics.fmean(ref_inertia)
         runs = len(ours_inertia)
-        table.add(workload, "visprim kmeans (k-means++ + Lloyd)", t_ours,
-                  f"mean inertia {mi_ours:.6g}", f"{runs} seeds")
-        table.add(workload, "sklearn KMeans lloyd", t_ref,
-                  f"mean inertia {mi_ref:.6g}", f"inertia ratio {mi_ours / mi_ref:.4f}")
+        table.add(
+            workload,
+            "visprim kmeans (k-means++ + Lloyd)",
+            t_ours,
+            f"mean inertia {mi_ours:.6g}",
+            f"{runs} seeds",
+        )
+        table.add(
+            workload,
+            "sklearn KMeans lloyd",
+            t_ref,
+            f"mean inertia {mi_ref:.6g}",
+            f"inertia ratio {mi_ours / mi_ref:.4f}",
+        )
         table.ratio(workload, "sklearn KMeans lloyd", t_ref, t_ours)
 
 

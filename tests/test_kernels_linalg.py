@@ -9,7 +9,6 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
-
 from visprim import kernels as K
 
 
@@ -241,9 +240,7 @@ def test_eigh_leading_k_and_known_answer() -> None:
 @settings(max_examples=60, deadline=None)
 @given(
     st.integers(1, 10).flatmap(
-        lambda d: hnp.arrays(
-            np.float64, (d, d), elements=st.floats(-100, 100, allow_nan=False)
-        )
+        lambda d: hnp.arrays(np.float64, (d, d), elements=st.floats(-100, 100, allow_nan=False))
     )
 )
 def test_eigh_property(m: np.ndarray) -> None:

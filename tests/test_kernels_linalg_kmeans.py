@@ -14,16 +14,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from sklearn.cluster import KMeans
 from sklearn.datasets import make_blobs
-
 from visprim import kernels as K
 
 
 def sklearn_lloyd(x: np.ndarray, init: np.ndarray, **kw: float) -> KMeans:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # ConvergenceWarning when max_iter is tiny
-        return KMeans(
-            n_clusters=init.shape[0], init=init, n_init=1, algorithm="lloyd", **kw
-        ).fit(x)
+        return KMeans(n_clusters=init.shape[0], init=init, n_init=1, algorithm="lloyd", **kw).fit(x)
 
 
 def segment_projections(n_segments: int, seed: int) -> np.ndarray:
@@ -42,7 +39,7 @@ def segment_projections(n_segments: int, seed: int) -> np.ndarray:
     bounds = np.concatenate([[0], cuts, [frames - 1]])
     grid = np.linspace(0.0, 1.0, 50)
     rows = []
-    for s, e in zip(bounds[:-1], bounds[1:]):
+    for s, e in zip(bounds[:-1], bounds[1:], strict=True):
         ts = s + grid * (e - s)
         rows.append(np.concatenate([np.interp(ts, t, signal[:, c]) for c in range(4)]))
     seg = np.array(rows)

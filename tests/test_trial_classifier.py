@@ -87,14 +87,17 @@ def test_wave_vs_raise_leave_one_style_out(shared_data: Path) -> None:
 
     def make() -> PrimitiveHistogramClassifier:
         return PrimitiveHistogramClassifier(
-            {"n_clusters": 10, "n_components": 10}, method="centroid", features="frequencies"
+            {"n_clusters": 10, "n_components": 10}, method="centroid", features="counts"
         )
 
     res = leave_one_group_out(make, kept, labels, styles)
     print(res)
-    # Chance is 0.5 (17 wave, 17 raise). Measured 0.85 when written; slow "elderly" waves
-    # of one or two segments look like raises, so perfection is not expected.
-    assert res.accuracy >= 0.75
+    # Chance is 0.5 (17 wave, 17 raise). Measured with the Rust kernels: 0.794 (27/34) at
+    # seed 0, 0.765-0.794 over k-means seeds 0-7 (features="frequencies": 0.706-0.853, less
+    # stable, hence counts). All 7 errors are waves taken for raises (active, elderly,
+    # exhausted, feminine styles), whose few slow strokes look like a raise; the number of
+    # segments alone already scores 0.765 (26/34). The threshold keeps a 3-trial margin.
+    assert res.accuracy >= 0.70
     # Deterministic for the model's seed.
     again = leave_one_group_out(make, kept, labels, styles)
     np.testing.assert_array_equal(again.predictions, res.predictions)

@@ -7,6 +7,16 @@ Data: ``DATA...`` are recording files, folders or globs read with
 imitation experiment (:func:`visprim.datasets.imitation_experiment`) is used. The model file
 records where its trials came from, so ``visprim report MODEL`` can redraw the per-trial
 figures from the same data without DATA.
+
+Frame rate of recordings: the method's low-pass cutoff (``--cutoff``) is a fraction of the
+Nyquist frequency and its SEG-1 window and SEG-2 constant were set for the original study's
+34 ms frame period, so ``learn`` resamples DATA to ``--resample`` seconds (default 0.034, see
+:func:`visprim.io.resample_trial`; ``--no-resample`` keeps each file's rate). The period is
+recorded in the model file; ``report`` and ``classify`` resample their DATA the same way.
+
+Fewer segments than ``--clusters``: ``learn`` stops with an error naming the number of
+segments found (it does not silently learn fewer primitives than asked); lower
+``--clusters`` or give more recordings.
 """
 
 from __future__ import annotations
@@ -21,6 +31,8 @@ from typing import Any
 from visprim.trial import Trial
 
 _DEFAULT_GENERATED = {"n_subjects": 11, "n_stimuli": 20, "seed": 0}
+#: Frame period (s) recordings are resampled to by default: the original study's 34 ms.
+DEFAULT_RESAMPLE_S = 0.034
 
 
 # ---------------------------------------------------------------------------- data
@@ -47,11 +59,11 @@ def load_source(source: dict[str, Any]) -> list[Trial]:
             int(source.get("seed", 0)),
         )
     if kind == "files":
-        return _read_files(list(source.get("paths", [])))
+        return _read_files(list(source.get("paths", [])), source.get("resample"))
     raise ValueError(f"unknown data source {source!r}")
 
 
-def _read_files(paths: Sequence[str]) -> list[Trial]:
+def _read_files(paths: Sequence[str], resample: float | None = None) -> list[Trial]:
     try:
         from visprim.io import read_many
     except ImportError as exc:  # pragma: no cover - the readers are part of visprim
@@ -59,7 +71,7 @@ def _read_files(paths: Sequence[str]) -> list[Trial]:
             f"visprim: cannot read recordings, visprim.io unavailable ({exc})"
         ) from None
     try:
-        trials = read_many(list(paths))
+        trials = read_many(list(paths), resample=resample)
     except (ValueError, OSError) as exc:
         raise SystemExit(f"visprim: {exc}") from None
     if not trials:
@@ -67,15 +79,26 @@ def _read_files(paths: Sequence[str]) -> list[Trial]:
     return list(trials)
 
 
-def _trials_and_source(args: argparse.Namespace) -> tuple[list[Trial], dict[str, Any]]:
+def _trials_and_source(
+    args: argparse.Namespace, resample: float | None = None
+) -> tuple[list[Trial], dict[str, Any]]:
+    """DATA (resampled to ``resample`` s, None = file rate) or the generated experiment."""
     data = list(getattr(args, "data", []) or [])
     if data and getattr(args, "generated", False):
         raise SystemExit("visprim: give DATA files or --generated, not both")
     if data:
-        trials = _read_files(data)
-        return trials, {"kind": "files", "paths": [str(Path(p).resolve()) for p in data]}
+        trials = _read_files(data, resample)
+        paths = [str(Path(p).resolve()) for p in data]
+        return trials, {"kind": "files", "paths": paths, "resample": resample}
     source = _generated_source(args)
     return load_source(source), source
+
+
+def _model_period(model: Any) -> float | None:
+    """The period DATA given to ``report``/``classify`` is resampled to: the model's own
+    (recorded by ``learn``), else the default (models of generated data: 34 ms frames)."""
+    period = (model.training_source_ or {}).get("resample", DEFAULT_RESAMPLE_S)
+    return None if period is None else float(period)
 
 
 def _add_generated_options(p: argparse.ArgumentParser) -> None:
@@ -156,13 +179,14 @@ def _learn(args: argparse.Namespace) -> int:
 
     with stages(3, "learn") as st:
         st.step("reading data")
-        trials, source = _trials_and_source(args)
+        trials, source = _trials_and_source(args, args.resample)
         st.step(f"fitting {len(trials)} trials")
         model = _model_from_args(args)
         try:
             model.fit(trials, source=source)
         except ValueError as exc:
-            raise SystemExit(f"visprim learn: {exc}") from None
+            hint = " (option --clusters)" if "n_clusters=" in str(exc) else ""
+            raise SystemExit(f"visprim learn: {exc}{hint}") from None
         st.step("error tables")
         tables = model.error_table()
     path = save_model(model, args.out)
@@ -193,7 +217,7 @@ def _report(args: argparse.Namespace) -> int:
     model = PrimitiveModel.load(args.model)
     trials: list[Trial] | None = None
     if args.data or args.generated:
-        trials, _ = _trials_and_source(args)
+        trials, _ = _trials_and_source(args, _model_period(model))
     elif model.training_source_:
         try:
             trials = load_source(model.training_source_)
@@ -220,7 +244,7 @@ def _classify(args: argparse.Namespace) -> int:
     from visprim.model import PrimitiveModel
 
     model = PrimitiveModel.load(args.model)
-    trials, _ = _trials_and_source(args)
+    trials, _ = _trials_and_source(args, _model_period(model))
     results = classify_trials(model, trials)
     lines = []
     for r in results:
@@ -371,6 +395,21 @@ def add_subcommands(sub: Any) -> None:
         help="recording files, folders or globs (default: the generated experiment)",
     )
     p.add_argument("--out", required=True, metavar="MODEL", help="model file to write (.npz)")
+    p.add_argument(
+        "--resample",
+        type=float,
+        default=DEFAULT_RESAMPLE_S,
+        metavar="SECONDS",
+        help="resample DATA to this frame period before learning, so that --cutoff and the "
+        "segmentation mean what they meant at the study's rate (default 0.034)",
+    )
+    p.add_argument(
+        "--no-resample",
+        dest="resample",
+        action="store_const",
+        const=None,
+        help="keep each recording's own frame rate",
+    )
     _add_generated_options(p)
     _add_model_options(p)
     p.set_defaults(func=_learn)

@@ -74,7 +74,7 @@ pub const MAX_LOCAL_TRIALS: usize = 64;
 /// Rows of one cluster of the partition "nearest centre so far".
 #[derive(Clone, Debug, Default)]
 struct Cluster {
-    /// Row indices, ascending.
+    /// Row indices (in a deterministic order).
     members: Vec<u32>,
     /// `Σ D(x)²` over the members, summed in member order.
     pot: f64,
@@ -251,13 +251,14 @@ pub fn kmeans_plusplus(
             first_item[j] = it;
         }
         let touched: Vec<usize> = (0..c).filter(|&j| masks[j] >> best & 1 == 1).collect();
-        // Per touched cluster: the rows it keeps and the (row, distance) it loses.
-        type Moved = (Vec<u32>, Vec<(u32, f64)>);
+        // Per touched cluster: what it keeps (when it loses rows) and the (row, distance)
+        // pairs it loses, in member order.
+        type Moved = (Option<Cluster>, Vec<(u32, f64)>);
         let moved: Vec<Moved> = touched
             .par_iter()
             .map(|&j| {
-                let mut keep = Vec::with_capacity(clusters[j].members.len());
                 let mut movers = Vec::new();
+                let mut keep = Cluster::default();
                 let mut it = first_item[j];
                 let members = &clusters[j].members;
                 while it < items.len() && items[it].0 == j {
@@ -265,33 +266,38 @@ pub fn kmeans_plusplus(
                     let (positions, dist) = (&results[it].0, &results[it].1);
                     let mut next = 0;
                     for (r, &i) in members[s..e].iter().enumerate() {
+                        let di = closest[i as usize];
                         if next < positions.len() && positions[next] as usize == r {
                             let v = dist[next * trials + best];
                             next += 1;
-                            if v < closest[i as usize] {
+                            if v < di {
                                 movers.push((i, v));
                                 continue;
                             }
                         }
-                        keep.push(i);
+                        keep.members.push(i);
+                        keep.pot += di;
+                        keep.radius2 = keep.radius2.max(di);
                     }
                     it += 1;
                 }
-                (keep, movers)
+                (if movers.is_empty() { None } else { Some(keep) }, movers)
             })
             .collect();
-        let mut new_members: Vec<u32> = Vec::new();
+        // The new cluster: the rows lost by the touched clusters, in cluster then member order.
+        let mut fresh = Cluster::default();
         for (&j, (keep, movers)) in touched.iter().zip(moved) {
             for &(i, v) in &movers {
                 closest[i as usize] = v;
-                new_members.push(i);
+                fresh.members.push(i);
+                fresh.pot += v;
+                fresh.radius2 = fresh.radius2.max(v);
             }
-            if !movers.is_empty() {
-                clusters[j] = Cluster::from_members(keep, &closest);
+            if let Some(keep) = keep {
+                clusters[j] = keep;
             }
         }
-        new_members.sort_unstable();
-        clusters.push(Cluster::from_members(new_members, &closest));
+        clusters.push(fresh);
     }
     (centers, indices)
 }
@@ -380,8 +386,7 @@ mod tests {
         let mut idx = vec![rng.below(n)];
         let mut closest: Vec<f64> = (0..n).map(|i| dist(i, idx[0])).collect();
         let mut members: Vec<Vec<u32>> = vec![(0..n as u32).collect()];
-        let mut assign = vec![0usize; n];
-        for c in 1..k {
+        for _ in 1..k {
             let clusters: Vec<Cluster> = members
                 .iter()
                 .map(|m| Cluster::from_members(m.clone(), &closest))
@@ -403,17 +408,21 @@ mod tests {
             let best = (0..trials).fold(0, |b, t| if pots[t] < pots[b] { t } else { b });
             let t = cands[best];
             idx.push(t);
-            members.push(Vec::new());
-            for i in 0..n {
-                let v = dist(i, t);
-                if v < closest[i] {
-                    closest[i] = v;
-                    assign[i] = c;
-                }
+            // Rows move to the new cluster in (cluster, member) order.
+            let mut fresh = Vec::new();
+            for m in members.iter_mut() {
+                m.retain(|&i| {
+                    let v = dist(i as usize, t);
+                    if v < closest[i as usize] {
+                        closest[i as usize] = v;
+                        fresh.push(i);
+                        false
+                    } else {
+                        true
+                    }
+                });
             }
-            members = (0..=c)
-                .map(|j| (0..n as u32).filter(|&i| assign[i as usize] == j).collect())
-                .collect();
+            members.push(fresh);
         }
         idx
     }

@@ -97,17 +97,24 @@ pub fn resample_segments(
 /// Point `k` of a segment is `numpy.linspace(start, end, n)[k]` (`k * step + start`, the
 /// last exactly `end`); on the frame grid 0, 1, ..., frames - 1 it falls in `[j, j + 1]`, `j =
 /// min(floor(x), frames - 2)`. Returns `(j, x - j)`; the fraction is exactly 1 only for a point
-/// on the last frame.
+/// on the last frame. Requires `0 <= start < end <= frames - 1` (checked by `check`).
 #[inline(always)]
 fn locate(k: usize, n: usize, start: f64, step: f64, end: f64, frames: usize) -> (usize, f64) {
+    // Signed conversions: one instruction each (`n`, `frames` are far below 2^53).
     let x = if k == n - 1 {
         end
     } else {
-        k as f64 * step + start
+        let x = k as i64 as f64 * step + start;
+        // Never past `end` (rounding); never below `start >= 0`.
+        if x > end {
+            end
+        } else {
+            x
+        }
     };
-    // `x` is in [0, frames - 1] (checked by `check`); `as` saturates anyway.
-    let j = (x as usize).min(frames - 2);
-    (j, x - j as f64)
+    // SAFETY: `0 <= x <= frames - 1`, finite and far inside the range of i64.
+    let j = unsafe { x.to_int_unchecked::<i64>() }.min(frames as i64 - 2);
+    (j as usize, x - j as f64)
 }
 
 /// Resamples segments into consecutive rows of `dst` (`C * n` each) for `C` channels known at
@@ -130,20 +137,34 @@ fn resample_rows<const C: usize>(
     // `values` holds exactly `frames * C` of them.
     let rows: &[[f64; C]] =
         unsafe { std::slice::from_raw_parts(values.as_ptr().cast::<[f64; C]>(), frames) };
-    let mut tmp = vec![[0.0f64; C]; n];
+    // Point-major scratch, padded to a multiple of 4 points for the transposition.
+    let n4 = n.div_ceil(4) * 4;
+    let mut tmp = vec![[0.0f64; C]; n4];
     for ((&start, &end), out) in starts.iter().zip(ends).zip(dst.chunks_exact_mut(C * n)) {
         let step = (end - start) / (n - 1) as f64;
-        for (k, r) in tmp.iter_mut().enumerate() {
+        for (k, r) in tmp[..n].iter_mut().enumerate() {
             let (j, frac) = locate(k, n, start, step, end, frames);
-            let (lo, hi) = (rows[j], rows[j + 1]);
-            *r = std::array::from_fn(|c| (hi[c] - lo[c]) * frac + lo[c]);
-            if frac == 1.0 {
-                *r = hi;
-            }
+            // SAFETY: `j <= frames - 2` (`locate`), so `j + 1 < frames`.
+            let (lo, hi) = unsafe { (rows.get_unchecked(j), rows.get_unchecked(j + 1)) };
+            let v: [f64; C] = std::array::from_fn(|c| (hi[c] - lo[c]) * frac + lo[c]);
+            *r = if frac == 1.0 { *hi } else { v };
         }
-        for (c, o) in out.chunks_exact_mut(n).enumerate() {
-            for (v, r) in o.iter_mut().zip(&tmp) {
-                *v = r[c];
+        // Transpose 4 points at a time: `out[c * n + k] = tmp[k][c]`.
+        for (kb, block) in tmp.chunks_exact(4).enumerate() {
+            let k0 = kb * 4;
+            let width = (n - k0).min(4);
+            for c in 0..C {
+                let col = [block[0][c], block[1][c], block[2][c], block[3][c]];
+                if width == 4 {
+                    let o: &mut [f64; 4] = (&mut out[c * n + k0..c * n + k0 + 4])
+                        .try_into()
+                        .expect("4 points");
+                    *o = col;
+                } else {
+                    for (i, &v) in col[..width].iter().enumerate() {
+                        out[c * n + k0 + i] = v;
+                    }
+                }
             }
         }
     }
@@ -174,6 +195,65 @@ fn resample_rows_any(
                     (hi[c] - lo[c]) * frac + lo[c]
                 };
             }
+        }
+    }
+}
+
+/// [`resample_rows`] for 4 channels with AVX2: the 4 channels of a point are interpolated in
+/// one vector, and 4 points at a time are transposed in registers into the 4 channel rows.
+/// Same arithmetic (`(hi - lo) * frac + lo`, no fused multiply-add).
+///
+/// SAFETY (caller): the CPU has AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn resample4_avx2(values: &[f64], starts: &[f64], ends: &[f64], n: usize, dst: &mut [f64]) {
+    use std::arch::x86_64::*;
+    const C: usize = 4;
+    let frames = values.len() / C;
+    assert!(n >= 2 && frames >= 2 && values.len() == frames * C);
+    assert!(dst.len() == starts.len() * C * n && starts.len() == ends.len());
+    let base = values.as_ptr();
+    for ((&start, &end), out) in starts.iter().zip(ends).zip(dst.chunks_exact_mut(C * n)) {
+        let step = (end - start) / (n - 1) as f64;
+        let point = |k: usize| {
+            let (j, frac) = locate(k, n, start, step, end, frames);
+            // SAFETY: `j + 1 < frames` (`locate`): rows j and j + 1 are inside `values`.
+            unsafe {
+                let lo = _mm256_loadu_pd(base.add(j * C));
+                let hi = _mm256_loadu_pd(base.add(j * C + C));
+                if frac == 1.0 {
+                    hi
+                } else {
+                    let d = _mm256_sub_pd(hi, lo);
+                    _mm256_add_pd(_mm256_mul_pd(d, _mm256_set1_pd(frac)), lo)
+                }
+            }
+        };
+        let optr = out.as_mut_ptr();
+        let mut k = 0;
+        while k + 4 <= n {
+            let (r0, r1, r2, r3) = (point(k), point(k + 1), point(k + 2), point(k + 3));
+            // SAFETY: `c * n + k + 3 < C * n = out.len()` for every channel c.
+            unsafe {
+                let t0 = _mm256_unpacklo_pd(r0, r1);
+                let t1 = _mm256_unpackhi_pd(r0, r1);
+                let t2 = _mm256_unpacklo_pd(r2, r3);
+                let t3 = _mm256_unpackhi_pd(r2, r3);
+                _mm256_storeu_pd(optr.add(k), _mm256_permute2f128_pd(t0, t2, 0x20));
+                _mm256_storeu_pd(optr.add(n + k), _mm256_permute2f128_pd(t1, t3, 0x20));
+                _mm256_storeu_pd(optr.add(2 * n + k), _mm256_permute2f128_pd(t0, t2, 0x31));
+                _mm256_storeu_pd(optr.add(3 * n + k), _mm256_permute2f128_pd(t1, t3, 0x31));
+            }
+            k += 4;
+        }
+        while k < n {
+            let mut v = [0.0f64; 4];
+            // SAFETY: 4 values into a 4-array.
+            unsafe { _mm256_storeu_pd(v.as_mut_ptr(), point(k)) };
+            for (c, &x) in v.iter().enumerate() {
+                out[c * n + k] = x;
+            }
+            k += 1;
         }
     }
 }
@@ -213,9 +293,14 @@ kernels!(rows_avx512, "avx512f,avx512vl,avx2,fma");
 
 /// The widest build this CPU runs (chosen at run time). The arithmetic is identical in all:
 /// `x * y + z` is never contracted to a fused multiply-add by Rust.
-fn pick_kernel(_channels: usize) -> Kernel {
+fn pick_kernel(channels: usize) -> Kernel {
+    let _ = channels;
     #[cfg(target_arch = "x86_64")]
     {
+        if channels == 4 && std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2.
+            return |v, _, s, e, n, d| unsafe { resample4_avx2(v, s, e, n, d) };
+        }
         if std::arch::is_x86_feature_detected!("avx512f")
             && std::arch::is_x86_feature_detected!("avx512vl")
         {
@@ -256,6 +341,42 @@ mod tests {
         let values = [0.0, 1.0, 4.0, 9.0];
         let out = resample_segments(&values, 1, &[0.25], &[3.0], 2).unwrap();
         assert_eq!(out, vec![0.25, 9.0]);
+    }
+
+    #[test]
+    fn every_kernel_matches_the_plain_formula_bit_for_bit() {
+        // Pseudo-random values, 1..=9 channels, segments ending on the last frame, odd n.
+        let mut state = 99u64;
+        let mut next = || {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for channels in 1..=9 {
+            let frames = 37;
+            let values: Vec<f64> = (0..frames * channels).map(|_| next() * 4.0 - 2.0).collect();
+            let last = (frames - 1) as f64;
+            let mut starts = vec![0.0, 3.25, 10.0];
+            let mut ends = vec![last, last, 10.5];
+            for _ in 0..20 {
+                let a = next() * last;
+                let b = a + (last - a) * next().max(1e-3);
+                starts.push(a);
+                ends.push(b);
+            }
+            for n in [2usize, 5, 100, 101] {
+                let mut want = vec![0.0; starts.len() * channels * n];
+                resample_rows_any(&values, channels, &starts, &ends, n, &mut want);
+                let got = resample_segments(&values, channels, &starts, &ends, n).unwrap();
+                assert_eq!(got, want, "channels {channels} n {n}");
+                let mut portable = vec![0.0; want.len()];
+                rows_portable(&values, channels, &starts, &ends, n, &mut portable);
+                assert_eq!(portable, want, "portable, channels {channels} n {n}");
+                // The last point of a segment ending on the last frame is that frame.
+                for c in 0..channels {
+                    assert_eq!(want[c * n + n - 1], values[(frames - 1) * channels + c]);
+                }
+            }
+        }
     }
 
     #[test]
