@@ -8,7 +8,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use visprim::filter::{butter_sos, sections, sosfiltfilt_ragged};
+use visprim::filter::{butter_sos, sections, sosfiltfilt_ragged, sosfiltfilt_rows};
 use visprim::lanes::{run_block, Level};
 use visprim::resample::resample_segments;
 use visprim::zvc::zero_velocity_crossings_ragged;
@@ -37,13 +37,19 @@ fn corpus() -> (Vec<f64>, Vec<i64>) {
     for tr in 0..TRIALS {
         for c in 0..CHANNELS {
             let comps: Vec<(f64, f64, f64)> = (0..3)
-                .map(|_| (rng.next(), 0.3 + 1.5 * rng.next(), 6.283 * rng.next()))
+                .map(|_| {
+                    (
+                        rng.next(),
+                        0.3 + 1.5 * rng.next(),
+                        std::f64::consts::TAU * rng.next(),
+                    )
+                })
                 .collect();
             for t in 0..FRAMES {
                 let s = t as f64 / FRAMES as f64;
                 let x: f64 = comps
                     .iter()
-                    .map(|&(a, f, p)| a * (6.283 * f * s + p).sin())
+                    .map(|&(a, f, p)| a * (std::f64::consts::TAU * f * s + p).sin())
                     .sum();
                 v[(tr * FRAMES + t) * CHANNELS + c] = x + 0.01 * (rng.next() - 0.5);
             }
@@ -80,6 +86,24 @@ fn bench_filter(c: &mut Criterion) {
     g.throughput(Throughput::Elements(values.len() as u64));
     g.bench_function("10000x4x150/order10", |b| {
         b.iter(|| sosfiltfilt_ragged(&sos, black_box(&values), CHANNELS, &offsets, None).unwrap())
+    });
+    g.finish();
+    // The same signals as rows (signals, frames): `sosfiltfilt` of a 2-D array.
+    let mut rows = vec![0.0; values.len()];
+    for tr in 0..TRIALS {
+        for t in 0..FRAMES {
+            for c in 0..CHANNELS {
+                rows[(tr * CHANNELS + c) * FRAMES + t] = values[(tr * FRAMES + t) * CHANNELS + c];
+            }
+        }
+    }
+    let mut g = c.benchmark_group("sosfiltfilt_rows");
+    g.sample_size(20).measurement_time(Duration::from_secs(8));
+    g.throughput(Throughput::Elements(rows.len() as u64));
+    g.bench_function("40000x150/order10", |b| {
+        b.iter(|| {
+            sosfiltfilt_rows(&sos, black_box(&rows), TRIALS * CHANNELS, FRAMES, None).unwrap()
+        })
     });
     g.finish();
 }

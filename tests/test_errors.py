@@ -10,12 +10,16 @@ import numpy as np
 import pytest
 from _pipeline_data import fitted
 from visprim.errors import (
+    NEGATIVE_EIGENVALUE_TOLERANCE,
     ErrorTables,
     angular_error_deg,
+    clipped_eigenvalues,
     clustering_error,
+    compute_error_tables,
     measured_projection_error,
     total_error,
 )
+from visprim.pca import PCABasis, fit_pca
 
 
 @pytest.fixture(scope="module", params=["seg2", "seg1"])
@@ -113,3 +117,51 @@ def test_markdown_csv_and_dict_round_trip(tables):
     assert [float(v) for v in rows[1]] == pytest.approx(list(tables.total.rows[0]))
     again = ErrorTables.from_dict(tables.to_dict())
     assert again.to_markdown() == md
+
+
+def test_rounding_negative_eigenvalues_count_as_zero_and_real_negatives_are_refused():
+    w = np.array([3.0, 1.0, 1e-15, -1e-14, -2e-13])
+    np.testing.assert_array_equal(clipped_eigenvalues(w), [3.0, 1.0, 1e-15, 0.0, 0.0])
+    assert w[-1] == -2e-13  # the input is not modified
+    # The tolerance is relative to the trace (sum of |eigenvalues|, 4 here).
+    edge = -NEGATIVE_EIGENVALUE_TOLERANCE * 4.0 * 0.99
+    assert clipped_eigenvalues([3.0, 1.0, edge])[-1] == 0.0
+    with pytest.raises(ValueError, match=r"eigenvalue 2 is -0\.001.*covariance"):
+        clipped_eigenvalues([3.0, 1.0, -1e-3])
+    with pytest.raises(ValueError, match="NaN"):
+        clipped_eigenvalues([1.0, np.nan])
+
+
+def _small_corpus_basis():
+    """PCA of 6 vectors in 40-D: rank 5, so eigenvalues 5.. are rounding around 0."""
+    rng = np.random.default_rng(4)
+    x = rng.normal(size=(6, 40)) @ np.diag(np.linspace(2.0, 0.1, 40))
+    return x, fit_pca(x)
+
+
+def test_table1_of_a_small_corpus_has_no_negative_dropped_sum():
+    x, b = _small_corpus_basis()
+    # The solver's eigenvalues beyond the rank are rounding of both signs; force a typical
+    # case (trailing values negative, as seen on real corpora) to check the clipping.
+    w = b.eigenvalues.copy()
+    w[5:] = -np.abs(w[5:]) - 1e-15
+    rounded = PCABasis(b.mean, w, b.eigenvectors, b.n_vectors)
+    for basis in (b, rounded):
+        t1 = compute_error_tables(basis, x, 3, f_values=(2, 5, 10, 40), k_values=(2,)).projection
+        dropped = t1.column("sum of dropped eigenvalues (rad^2)")
+        measured = t1.column("measured projection MSE (rad^2)")
+        assert np.all(dropped >= 0.0)
+        np.testing.assert_allclose(dropped, measured, rtol=1e-8, atol=1e-12)
+        assert np.all(t1.column("variance kept (%)") <= 100.0)
+    t1 = compute_error_tables(rounded, x, 3, f_values=(5, 10, 40), k_values=(2,)).projection
+    np.testing.assert_array_equal(t1.column("sum of dropped eigenvalues (rad^2)"), 0.0)
+    np.testing.assert_array_equal(t1.column("variance kept (%)"), 100.0)
+
+
+def test_a_genuinely_negative_eigenvalue_is_an_error_not_a_table():
+    x, b = _small_corpus_basis()
+    w = b.eigenvalues.copy()
+    w[-1] = -1e-6 * float(np.sum(w))
+    bad = PCABasis(b.mean, w, b.eigenvectors, b.n_vectors)
+    with pytest.raises(ValueError, match="eigenvalue 39 is"):
+        compute_error_tables(bad, x, 3, f_values=(10,), k_values=(2,))

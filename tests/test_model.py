@@ -211,3 +211,105 @@ def test_seg1_model_fits_and_refit_clears_state():
     n1 = m.n_training_segments_
     m.set_params(segmentation="seg2").fit(trials)
     assert m.seg2_threshold_ is not None and m.n_training_segments_ != n1
+
+
+TWO_PI = 2 * np.pi
+
+
+def _ik_with_whole_turns(monkeypatch, turns):
+    """Make the IK return each named trial's angles offset by whole turns of gamma and alpha
+    (``turns[name] = (m_gamma, m_alpha)``), as IK's unwrapping in time does on long real
+    recordings; the marker data are untouched."""
+    import visprim.preprocess as pre
+
+    ik = pre.arm_angles_corpus
+
+    def turned(trials):
+        out = ik(trials)
+        return [a + _shift(*turns.get(t.name, (0, 0))) for t, a in zip(trials, out, strict=True)]
+
+    monkeypatch.setattr(pre, "arm_angles_corpus", turned)
+
+
+def _shift(m_gamma, m_alpha):
+    return TWO_PI * np.array([m_gamma, 0.0, m_alpha, 0.0])
+
+
+def test_whole_turn_offsets_of_the_angles_change_no_vector_nor_primitive(monkeypatch):
+    m = fitted()
+    trials = list(default_trials()[:4])
+    base_corpus = m.prepare(trials)
+    base = m.vectorize(base_corpus)
+    base_labels = m.predict(trials)
+    base_curves = m.reconstruct(trials)
+    base_t, base_rec, base_orig = m.reconstruct_movement(trials[1], return_original=True)
+    turns = {
+        trials[0].name: (1, 0),
+        trials[1].name: (2, -3),
+        trials[2].name: (0, 1),
+        trials[3].name: (-4, 5),
+    }
+    _ik_with_whole_turns(monkeypatch, turns)
+    corpus = m.prepare(trials)
+    # The low-passed IK angles really are offset (the patch works) ...
+    for i, trial in enumerate(trials):
+        np.testing.assert_allclose(
+            corpus.angles[i], base_corpus.angles[i] + _shift(*turns[trial.name]), atol=1e-9
+        )
+    moved = m.vectorize(corpus)
+    # ... but the segments, vectors and primitives are the same.
+    np.testing.assert_allclose(moved.starts, base.starts, atol=1e-9)
+    np.testing.assert_allclose(moved.ends, base.ends, atol=1e-9)
+    np.testing.assert_allclose(moved.vectors, base.vectors, atol=1e-9)
+    expected = np.stack([_shift(*turns[trials[i].name]) for i in moved.trial])
+    np.testing.assert_allclose(moved.offsets - base.offsets, expected, atol=1e-9)
+    np.testing.assert_array_equal(m.predict(trials), base_labels)
+    # Reconstructions of trials are on the trial's own (offset) angles.
+    np.testing.assert_allclose(m.reconstruct(trials), base_curves + expected[:, None, :], atol=1e-8)
+    t, rec, orig = m.reconstruct_movement(trials[1], return_original=True)
+    shift = _shift(*turns[trials[1].name])
+    np.testing.assert_array_equal(t, base_t)
+    np.testing.assert_allclose(orig, base_orig + shift, atol=1e-9)
+    np.testing.assert_allclose(rec, base_rec + shift, atol=1e-8)
+    assert math.degrees(np.sqrt(np.mean((rec - orig) ** 2))) < 0.5
+    _, rec_c = m.reconstruct_movement(trials[1], source="cluster")
+    assert np.max(np.abs(rec_c - orig)) < np.pi  # no whole-turn error anywhere
+
+
+def test_reconstruct_segment_follows_offset_angles():
+    m = fitted()
+    trial = default_trials()[5]
+    corpus = m.prepare([trial])
+    times, angles = corpus.times[0], corpus.angles[0]
+    start, end = corpus.segments[0][1]
+    t0, r0 = m.reconstruct_segment(times, angles, start, end)
+    shift = _shift(-2, 3)
+    t1, r1 = m.reconstruct_segment(times, angles + shift, start, end)
+    np.testing.assert_array_equal(t1, t0)
+    np.testing.assert_allclose(r1, r0 + shift, atol=1e-9)
+    inside = (times >= start) & (times <= end)
+    assert math.degrees(np.sqrt(np.mean((r1 - (angles + shift)[inside]) ** 2))) < 1.0
+
+
+def test_real_recordings_segments_are_within_a_turn_and_movements_follow_their_angles(
+    shared_data,
+):
+    """CMU dances: the IK's unwrapped gamma/alpha leave (-pi, pi] (a zombie walk's alpha
+    sits near 2 pi); segment vectors are brought back, reconstructions follow the trial."""
+    from visprim.io import read_many
+
+    trials = read_many(shared_data / "cmu_asfamc", resample=0.034)
+    m = PrimitiveModel(n_clusters=10).fit(trials)
+    sv = m.vectorize(m.prepare(trials))
+    np.testing.assert_allclose(sv.vectors, m.training_vectors_, atol=1e-12)
+    means = to_curves(sv.vectors).mean(axis=1)
+    assert np.all((means[:, [0, 2]] > -np.pi) & (means[:, [0, 2]] <= np.pi))
+    turned = np.flatnonzero(np.any(sv.offsets != 0, axis=1))
+    assert turned.size >= 1  # the real data do need the shift
+    np.testing.assert_allclose(np.round(sv.offsets / TWO_PI) * TWO_PI, sv.offsets, atol=1e-12)
+    trial = trials[int(sv.trial[turned[0]])]
+    t, rec, orig = m.reconstruct_movement(trial, return_original=True)
+    assert t.size > 0.5 * trial.n_frames
+    assert math.degrees(np.sqrt(np.mean((rec - orig) ** 2))) < 1.0
+    _, rec_c = m.reconstruct_movement(trial, source="cluster")
+    assert np.max(np.abs(rec_c - orig)) < np.pi

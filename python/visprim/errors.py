@@ -6,7 +6,13 @@ approximation of it, averaged over the N training segments (units rad²).
 
 * **Projection error** (Table 1), for ``f`` eigenvectors: ``mean ‖s − (E_f p + s̄)‖²``.
   With the covariance divisor N it equals the sum of the dropped eigenvalues
-  ``Σ_{i>f} λ_i`` exactly; the table reports both (they agree to rounding).
+  ``Σ_{i>f} λ_i`` exactly; the table reports both (they agree to rounding). The eigenvalues
+  of a covariance are ≥ 0, but the eigensolver returns those of a rank-deficient K (fewer
+  segments than dimensions) as ±rounding (~1e-16 · trace K each); the sum uses
+  :func:`clipped_eigenvalues`, which sets negatives no larger in magnitude than
+  :data:`NEGATIVE_EIGENVALUE_TOLERANCE` · trace K to 0 and refuses (``ValueError``) larger
+  negatives, which no covariance can have (a damaged model, a basis of something else).
+  "Variance kept" uses the same clipped eigenvalues.
 * **Clustering error** (Table 2), for ``k`` clusters in the f-D projection space:
   ``mean ‖p − c_{label(p)}‖²`` (k-means inertia / N).
 * **Total error** (Table 3): ``mean ‖s − (E_f c_{label} + s̄)‖²``, the error of
@@ -57,9 +63,56 @@ def mean_squared_distance(a: ArrayLike, b: ArrayLike) -> float:
     return float(np.einsum("ij,ij->", diff, diff) / max(a.shape[0], 1))
 
 
+#: Relative tolerance of :func:`clipped_eigenvalues`: negatives down to this fraction of
+#: trace K are rounding and count as 0; below it they are an error.
+NEGATIVE_EIGENVALUE_TOLERANCE = 1e-9
+
+
+def clipped_eigenvalues(eigenvalues: ArrayLike) -> NDArray[np.float64]:
+    """Eigenvalues of a covariance matrix (rad²) with rounding negatives set to 0.
+
+    A covariance is positive semi-definite, so an eigenvalue ``λ_i < 0`` is rounding when
+    ``λ_i ≥ −tol`` with ``tol = NEGATIVE_EIGENVALUE_TOLERANCE · Σ_j |λ_j|`` (``Σ |λ_j|``
+    equals trace K for a PSD matrix and is never negative); it is set to 0.
+
+    Raises
+    ------
+    ValueError
+        An eigenvalue below ``−tol`` (not the spectrum of a covariance) or a non-finite one.
+    """
+    w = np.array(eigenvalues, dtype=np.float64, copy=True).reshape(-1)
+    if not np.all(np.isfinite(w)):
+        raise ValueError("eigenvalues contain NaN or infinity")
+    tol = NEGATIVE_EIGENVALUE_TOLERANCE * float(np.sum(np.abs(w)))
+    low = w < -tol
+    if np.any(low):
+        i = int(np.argmin(w))
+        raise ValueError(
+            f"eigenvalue {i} is {w[i]:.6g}, below -{NEGATIVE_EIGENVALUE_TOLERANCE:g} x trace "
+            f"= {-tol:.6g}: a covariance matrix has no such negative eigenvalue ({int(low.sum())} "
+            "of them; the model or basis is damaged or not a PCA)"
+        )
+    np.maximum(w, 0.0, out=w)
+    return w
+
+
 def projection_error(basis: PCABasis, f: int) -> float:
-    """Projection error of ``f`` eigenvectors: the sum of the dropped eigenvalues (rad²)."""
-    return basis.dropped_variance(f)
+    """Projection error of ``f`` eigenvectors: the sum of the dropped eigenvalues (rad²),
+    rounding negatives counted as 0 (:func:`clipped_eigenvalues`)."""
+    w = clipped_eigenvalues(basis.eigenvalues)
+    if not 0 <= int(f) <= w.shape[0]:
+        raise ValueError(f"f must be in [0, {w.shape[0]}], got {f}")
+    return float(np.sum(w[int(f) :]))
+
+
+def variance_kept(basis: PCABasis, f: int) -> float:
+    """Fraction of the total variance kept by the first ``f`` eigenvectors, from the clipped
+    eigenvalues (1 when the total variance is 0)."""
+    w = clipped_eigenvalues(basis.eigenvalues)
+    total = float(np.sum(w))
+    if total <= 0.0:
+        return 1.0
+    return 1.0 - projection_error(basis, f) / total
 
 
 def measured_projection_error(basis: PCABasis, vectors: ArrayLike, f: int) -> float:
@@ -241,7 +294,7 @@ def compute_error_tables(
                 fv,
                 mse,
                 measured,
-                100.0 * basis.explained_fraction(fv),
+                100.0 * variance_kept(basis, fv),
                 angular_error_deg(mse, d),
             )
         )

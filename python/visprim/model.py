@@ -6,8 +6,9 @@
 1. inverse kinematics → 4 angles (radians, :mod:`visprim.ik`);
 2. zero-phase Butterworth low-pass (:mod:`visprim.filtering`);
 3. segmentation, SEG-2 (default) or SEG-1 (:mod:`visprim.segment`);
-4. each segment resampled to ``n_samples`` per angle → a ``4 n``-D vector
-   (:mod:`visprim.vectors`);
+4. each segment resampled to ``n_samples`` per angle → a ``4 n``-D vector, γ and α shifted
+   by whole turns so that the segment's mean angle lies in (−π, π] (:mod:`visprim.vectors`;
+   reconstructions on a trial's clock add the shifts back);
 5. PCA (:mod:`visprim.pca`), keeping ``n_components`` eigenvectors ``E_f``;
 6. k-means with ``n_clusters`` clusters in the f-D projection space: the primitives.
 
@@ -31,7 +32,7 @@ from visprim.errors import DEFAULT_F_VALUES, DEFAULT_K_VALUES, ErrorTables, comp
 from visprim.pca import PCABasis, fit_pca
 from visprim.preprocess import PreparedCorpus, prepare_corpus, seg2_partition
 from visprim.trial import Trial
-from visprim.vectors import SegmentVectors, corpus_vectors, stretch, to_curves
+from visprim.vectors import SegmentVectors, corpus_vectors, stretch, to_curves, vectors_from_frames
 
 Source = Literal["projection", "cluster"]
 
@@ -194,7 +195,9 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         )
 
     def vectorize(self, corpus: PreparedCorpus) -> SegmentVectors:
-        """Segment vectors (N, 4 n_samples) of a prepared corpus (radians)."""
+        """Segment vectors (N, 4 n_samples) of a prepared corpus (radians), with γ and α of
+        each segment shifted by whole turns (:attr:`SegmentVectors.offsets`, see
+        :mod:`visprim.vectors`)."""
         seg = corpus.segmentation
         if seg.n_segments == 0:
             raise ValueError(
@@ -203,15 +206,10 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
                 f"({', '.join(corpus.names[:3])}{', ...' if corpus.n_trials > 3 else ''})"
             )
         starts, ends = seg.global_frames()
-        last = float(corpus.angles_all.shape[0] - 1)
-        vectors = kernels.resample_segments(
+        return vectors_from_frames(
             corpus.angles_all,
-            np.clip(starts, 0.0, last),
-            np.clip(ends, 0.0, last),
-            n=int(self.n_samples),
-        )
-        return SegmentVectors(
-            vectors=np.asarray(vectors),
+            starts,
+            ends,
             trial=seg.trial,
             starts=seg.start,
             ends=seg.end,
@@ -322,10 +320,18 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
     # ------------------------------------------------------------------ transform / predict
 
     def _vectors_of(self, X: ArrayLike | Sequence[Trial] | Trial) -> NDArray[np.float64]:
+        return self._segment_vectors_of(X)[0]
+
+    def _segment_vectors_of(
+        self, X: ArrayLike | Sequence[Trial] | Trial
+    ) -> tuple[NDArray[np.float64], SegmentVectors | None]:
+        """``(vectors (N, d), SegmentVectors or None)``: the segments of trial(s) (with their
+        whole-turn offsets), or vectors given directly (checked; no offsets)."""
         if isinstance(X, Trial) or (
             isinstance(X, (list, tuple)) and len(X) > 0 and isinstance(X[0], Trial)
         ):
-            return self.vectorize(self.prepare(_as_trials(X))).vectors
+            sv = self.vectorize(self.prepare(_as_trials(X)))
+            return sv.vectors, sv
         x = np.asarray(X, dtype=np.float64)
         x = np.atleast_2d(x)
         if x.ndim != 2 or x.shape[1] != self.dim:
@@ -335,7 +341,7 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
             )
         if not np.all(np.isfinite(x)):
             raise ValueError("segment vectors contain NaN or infinity")
-        return x
+        return x, None
 
     def transform(self, X: ArrayLike | Sequence[Trial] | Trial) -> NDArray[np.float64]:
         """Projections ``p = E_fᵀ (s − s̄)``, shape (N, f).
@@ -372,11 +378,15 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
 
         ``source="projection"``: ``s = E_f p + s̄`` with ``p`` the segment's projection;
         ``source="cluster"``: ``s = E_f c + s̄`` with ``c`` the centre of its primitive.
-        Use :func:`visprim.vectors.stretch` (or :meth:`reconstruct_segment`) to put a curve
-        back on its segment's duration.
+        For segment vectors ``X`` the curves are in the vectors' own frame; for trial(s)
+        each segment's whole-turn offsets of γ and α are added back, so the curves are on
+        the trial's own angles. Use :func:`visprim.vectors.stretch` (or
+        :meth:`reconstruct_segment`) to put a curve back on its segment's duration.
         """
-        p = self.transform(X)
-        return to_curves(self._reconstruct_vectors(p, source))
+        self._check_fitted()
+        x, sv = self._segment_vectors_of(X)
+        rec = self._reconstruct_vectors(self.basis_.project(x, int(self.n_components)), source)
+        return to_curves(rec) if sv is None else sv.to_trial_angles(rec)
 
     def _reconstruct_vectors(self, p: NDArray[np.float64], source: Source) -> NDArray[np.float64]:
         if source == "projection":
@@ -406,8 +416,10 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
 
         The trial is segmented with SEG-2 (with the fitted constant ``seg2_threshold_`` when
         the model has one, else tuned on this trial), each segment is projected and
-        reconstructed (from its projection or its primitive, ``source``), stretched back to
-        its duration and evaluated at the trial's frame times.
+        reconstructed (from its projection or its primitive, ``source``), its whole-turn
+        offsets of γ and α added back (so the result follows the trial's unwrapped angles,
+        see :mod:`visprim.vectors`), stretched back to its duration and evaluated at the
+        trial's frame times.
 
         Returns
         -------
@@ -424,7 +436,7 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
             threshold=getattr(self, "seg2_threshold_", None) or self.seg2_threshold,
         )
         sv = corpus_vectors([times], [angles], [segments], n_samples=int(self.n_samples))
-        curves = to_curves(self._reconstruct_vectors(self.transform(sv.vectors), source))
+        curves = sv.to_trial_angles(self._reconstruct_vectors(self.transform(sv.vectors), source))
         out_t, out_a, out_o = [], [], []
         for j, (start, end) in enumerate(segments):
             last = j == len(segments) - 1
@@ -450,14 +462,15 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         *,
         source: Source = "projection",
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """One segment [start, end] s of a (low-passed) angle trajectory, reconstructed and
-        stretched back to its duration: ``(frame times (m,) s, angles (m, 4) rad)``."""
+        """One segment [start, end] s of a (low-passed) angle trajectory, reconstructed,
+        with its whole-turn offsets of γ and α added back (on the trajectory's own angles),
+        and stretched back to its duration: ``(frame times (m,) s, angles (m, 4) rad)``."""
         self._check_fitted()
         t = np.asarray(times, dtype=np.float64)
         sv = corpus_vectors(
             [t], [angles], [np.array([[start, end]])], n_samples=int(self.n_samples)
         )
-        curve = to_curves(self._reconstruct_vectors(self.transform(sv.vectors), source))[0]
+        curve = sv.to_trial_angles(self._reconstruct_vectors(self.transform(sv.vectors), source))[0]
         mask = (t >= start) & (t <= end)
         return t[mask], stretch(curve, start, end, t[mask])
 

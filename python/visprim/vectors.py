@@ -12,6 +12,26 @@ indices* by linear interpolation of the trial's timestamps; the kernel then samp
 spaced fractional frame indices, i.e. equally spaced instants when the frame rate is uniform
 (and up to the timestamp jitter otherwise).
 
+Whole turns of γ and α
+----------------------
+Inverse kinematics unwraps γ and α in time (:mod:`visprim.ik`), which is right for one
+trial's curves but leaves a segment of a long recording (a pirouette, a dance) a whole
+number of turns (2π m) away from the same movement elsewhere: without care, two identical
+arm motions become two far-apart vectors and inflate PCA and k-means errors. So each
+segment's *periodic channels* (``periodic_channels``, by default γ and α,
+:data:`PERIODIC_CHANNELS`) are shifted by the multiple of 2π that brings the segment's
+**mean angle** (the arithmetic mean of its ``n`` resampled samples of the unwrapped curve)
+into (−π, π]; the curve keeps its shape (it stays continuous and may leave (−π, π]).
+
+The mean, rather than the first sample, is the reference because it depends on the whole
+segment, not on one boundary sample that moves with the segmentation; rather than the
+circular mean because it is always defined (a curve spanning whole turns has no circular
+mean) and, being linear, exactly follows a whole-turn offset of the input. The shifts are
+kept per segment, :attr:`SegmentVectors.offsets` (N, C) radians (zero for the other
+channels), and :meth:`SegmentVectors.to_trial_angles` adds them back to put reconstructed
+curves onto the trial's own angles (continuous with the trial's curves). β (in [0, π]) and
+the elbow flexion are not periodic and are never shifted.
+
 The inverse operation, :func:`stretch`, puts an ``(n, 4)`` curve back onto a segment's
 duration and evaluates it at given instants.
 """
@@ -29,6 +49,13 @@ from visprim import kernels
 #: Samples per degree of freedom (the paper's choice).
 DEFAULT_N_SAMPLES = 100
 
+#: Channels of the arm's angles (γ, β, α, elbow) that are angles about an unbounded axis,
+#: unwrapped in time by the IK: γ (0) and α (2). Their segments are brought to the branch
+#: whose mean lies in (−π, π] (see the module docstring).
+PERIODIC_CHANNELS: tuple[int, ...] = (0, 2)
+
+TWO_PI = 2.0 * np.pi
+
 
 @dataclass(frozen=True)
 class SegmentVectors:
@@ -44,6 +71,10 @@ class SegmentVectors:
         Segment limits on the trial's clock.
     n_samples : int
         Samples per channel ``n``.
+    offsets : (N, channels) float array, radians
+        Whole turns (multiples of 2π) *subtracted* from each segment's channels to build its
+        vector (zero for non-periodic channels): the segment's angles on the trial's clock
+        are its vector's curves plus these offsets (:meth:`to_trial_angles`).
     """
 
     vectors: NDArray[np.float64]
@@ -51,11 +82,30 @@ class SegmentVectors:
     starts: NDArray[np.float64]
     ends: NDArray[np.float64]
     n_samples: int
+    offsets: NDArray[np.float64]
 
     @property
     def durations(self) -> NDArray[np.float64]:
         """Segment durations in seconds, shape (N,)."""
         return self.ends - self.starts
+
+    @property
+    def n_channels(self) -> int:
+        """Number of angle channels C (4 for the arm)."""
+        return int(self.vectors.shape[1] // self.n_samples)
+
+    def to_trial_angles(self, vectors: ArrayLike) -> NDArray[np.float64]:
+        """Curves ``(N, n, C)`` radians of ``vectors`` ``(N, C * n)`` — one per segment, in
+        this object's segment order (e.g. reconstructions of :attr:`vectors`) — with each
+        segment's whole-turn :attr:`offsets` added back, i.e. on the trial's own
+        (unwrapped) angles."""
+        v = np.asarray(vectors, dtype=np.float64)
+        if v.shape != self.vectors.shape:
+            raise ValueError(
+                f"to_trial_angles: expected vectors of shape {self.vectors.shape} (one per "
+                f"segment), got {v.shape}"
+            )
+        return to_curves(v, self.n_channels) + self.offsets[:, None, :]
 
     def __len__(self) -> int:
         return int(self.vectors.shape[0])
@@ -75,6 +125,95 @@ def time_to_frame(times: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
             f"got [{t.min():.6g}, {t.max():.6g}] s"
         )
     return np.interp(t, times, np.arange(times.shape[0], dtype=np.float64))
+
+
+def _check_periodic(periodic_channels: Sequence[int], n_channels: int) -> tuple[int, ...]:
+    out = tuple(int(c) for c in periodic_channels)
+    bad = [c for c in out if not 0 <= c < n_channels]
+    if bad:
+        raise ValueError(
+            f"periodic_channels {list(out)}: channel(s) {bad} out of range for "
+            f"{n_channels} channel(s)"
+        )
+    if len(set(out)) != len(out):
+        raise ValueError(f"periodic_channels {list(out)}: repeated channel")
+    return out
+
+
+def turn_offsets(
+    vectors: ArrayLike,
+    n_samples: int,
+    periodic_channels: Sequence[int] = PERIODIC_CHANNELS,
+) -> NDArray[np.float64]:
+    """Whole-turn offsets ``(N, C)`` radians of channel-major vectors ``(N, C * n)``.
+
+    For each periodic channel, ``2π m`` with the integer ``m`` such that the channel's mean
+    over the segment minus ``2π m`` lies in (−π, π]; zero for the other channels.
+    """
+    v = np.atleast_2d(np.asarray(vectors, dtype=np.float64))
+    n = int(n_samples)
+    if v.ndim != 2 or n < 1 or v.shape[1] % n:
+        raise ValueError(f"vectors of shape {v.shape} are not (N, C * {n_samples})")
+    c = v.shape[1] // n
+    periodic = list(_check_periodic(periodic_channels, c))
+    offsets = np.zeros((v.shape[0], c))
+    if periodic:
+        means = v.reshape(v.shape[0], c, n)[:, periodic, :].mean(axis=2)
+        # "+ 0.0" turns the -0.0 of ceil on (-1, 0] into 0.0.
+        offsets[:, periodic] = TWO_PI * np.ceil((means - np.pi) / TWO_PI) + 0.0
+    return offsets
+
+
+def vectors_from_frames(
+    values: NDArray[np.float64],
+    start_frames: ArrayLike,
+    end_frames: ArrayLike,
+    *,
+    trial: ArrayLike,
+    starts: ArrayLike,
+    ends: ArrayLike,
+    n_samples: int = DEFAULT_N_SAMPLES,
+    periodic_channels: Sequence[int] = PERIODIC_CHANNELS,
+) -> SegmentVectors:
+    """Segment vectors of a concatenated corpus from fractional frame limits (one kernel call).
+
+    Parameters
+    ----------
+    values : (F, C) float64 array, radians
+        All trials' angle curves, concatenated.
+    start_frames, end_frames : (N,) arrays
+        Segment limits as fractional row indices into ``values`` (clipped into range:
+        interpolated indices may exceed the last row by rounding).
+    trial, starts, ends : (N,) arrays
+        Trial index and limits in seconds of each segment (kept in the result).
+    n_samples : int
+        Samples per channel.
+    periodic_channels : sequence of int
+        Channels brought to the branch whose segment mean lies in (−π, π] (module
+        docstring); ``()`` keeps every channel as it is.
+    """
+    values = np.ascontiguousarray(values, dtype=np.float64)
+    if values.ndim != 2:
+        raise ValueError(f"values must have shape (F, C), got {values.shape}")
+    periodic = _check_periodic(periodic_channels, values.shape[1])
+    last = float(values.shape[0] - 1)
+    s = np.clip(np.asarray(start_frames, dtype=np.float64), 0.0, last)
+    e = np.clip(np.asarray(end_frames, dtype=np.float64), 0.0, last)
+    vectors = np.asarray(kernels.resample_segments(values, s, e, n=int(n_samples)))
+    offsets = turn_offsets(vectors, int(n_samples), periodic)
+    if periodic and np.any(offsets):
+        c = values.shape[1]
+        vectors = (vectors.reshape(-1, c, int(n_samples)) - offsets[:, :, None]).reshape(
+            vectors.shape
+        )
+    return SegmentVectors(
+        vectors=vectors,
+        trial=np.asarray(trial, dtype=np.int64),
+        starts=np.asarray(starts, dtype=np.float64),
+        ends=np.asarray(ends, dtype=np.float64),
+        n_samples=int(n_samples),
+        offsets=offsets,
+    )
 
 
 def _check_segments(segments: ArrayLike, where: str) -> NDArray[np.float64]:
@@ -102,6 +241,7 @@ def corpus_vectors(
     segments_list: Sequence[ArrayLike],
     n_samples: int = DEFAULT_N_SAMPLES,
     names: Sequence[str] | None = None,
+    periodic_channels: Sequence[int] = PERIODIC_CHANNELS,
 ) -> SegmentVectors:
     """Resample every segment of every trial in ONE kernel call.
 
@@ -117,6 +257,9 @@ def corpus_vectors(
         Samples per channel (default 100).
     names : sequence of str, optional
         Trial names, used in error messages.
+    periodic_channels : sequence of int
+        Channels shifted by whole turns per segment (default γ and α; see the module
+        docstring and :attr:`SegmentVectors.offsets`); ``()`` for none.
 
     Returns
     -------
@@ -168,28 +311,30 @@ def corpus_vectors(
         offset += times.shape[0]
     if not starts:
         raise ValueError("corpus_vectors: no segments in the corpus")
-    all_values = np.ascontiguousarray(np.concatenate(values, axis=0))
-    s = np.concatenate(starts)
-    e = np.concatenate(ends)
-    # Interpolated indices may exceed the last frame by rounding; clip into range.
-    last = float(all_values.shape[0] - 1)
-    np.clip(s, 0.0, last, out=s)
-    np.clip(e, 0.0, last, out=e)
-    vectors = kernels.resample_segments(all_values, s, e, n=int(n_samples))
-    return SegmentVectors(
-        vectors=np.asarray(vectors),
+    return vectors_from_frames(
+        np.concatenate(values, axis=0),
+        np.concatenate(starts),
+        np.concatenate(ends),
         trial=np.concatenate(trial_idx),
         starts=np.concatenate(seg_starts),
         ends=np.concatenate(seg_ends),
         n_samples=int(n_samples),
+        periodic_channels=periodic_channels,
     )
 
 
 def segment_vectors(
-    times: ArrayLike, angles: ArrayLike, segments: ArrayLike, n_samples: int = DEFAULT_N_SAMPLES
+    times: ArrayLike,
+    angles: ArrayLike,
+    segments: ArrayLike,
+    n_samples: int = DEFAULT_N_SAMPLES,
+    periodic_channels: Sequence[int] = PERIODIC_CHANNELS,
 ) -> NDArray[np.float64]:
-    """Vectors ``(n_segments, C * n_samples)`` of one trial's segments (seconds)."""
-    return corpus_vectors([times], [angles], [segments], n_samples=n_samples).vectors
+    """Vectors ``(n_segments, C * n_samples)`` of one trial's segments (seconds), periodic
+    channels shifted by whole turns as :func:`corpus_vectors` does."""
+    return corpus_vectors(
+        [times], [angles], [segments], n_samples=n_samples, periodic_channels=periodic_channels
+    ).vectors
 
 
 def to_curves(vectors: ArrayLike, n_channels: int = 4) -> NDArray[np.float64]:

@@ -12,7 +12,7 @@
 
 use rayon::prelude::*;
 
-use crate::sqdist::{sq_dists, Panel};
+use crate::sqdist::{seed_block, sq_dists, Panel};
 
 /// Rows per parallel task.
 pub(crate) const CHUNK: usize = 1024;
@@ -198,20 +198,43 @@ pub fn kmeans_plusplus(
                         pots.iter_mut().for_each(|p| *p += di);
                     }
                 }
-                let mut dist = vec![0.0; computed.len() * trials];
-                let mut buf = vec![0.0; GROUP * kp];
-                for (g, grp) in computed.chunks(GROUP).enumerate() {
-                    let rows: Vec<&[f64]> = grp.iter().map(|&(_, i)| row(i)).collect();
-                    sq_dists(&rows, &panel, &mut buf);
-                    for (r, &(_, i)) in grp.iter().enumerate() {
+                // Distances to the candidates (kp per row) and, per candidate, the potential
+                // Σ min(D, d_t) over the rows it may bring closer (4·D(x)² > ‖c - t‖²).
+                let mut dist = vec![0.0; computed.len() * kp];
+                let mut lim = vec![f64::INFINITY; kp];
+                lim[..trials].copy_from_slice(ccj);
+                if kp == 8 {
+                    let lim8: [f64; 8] = lim[..8].try_into().expect("8 values");
+                    let mut acc = [0.0; 8];
+                    let mut near = Vec::with_capacity(GROUP);
+                    for (g, grp) in computed.chunks(GROUP).enumerate() {
+                        let rows: Vec<&[f64]> = grp.iter().map(|&(_, i)| row(i)).collect();
+                        near.clear();
+                        near.extend(grp.iter().map(|&(_, i)| closest[i]));
+                        let start = g * GROUP * 8;
+                        let out = &mut dist[start..start + grp.len() * 8];
+                        seed_block(&rows, &near, &panel, &lim8, out, &mut acc);
+                    }
+                    for (p, a) in pots.iter_mut().zip(&acc) {
+                        *p += a;
+                    }
+                } else {
+                    let mut acc = vec![0.0; kp];
+                    for (g, grp) in computed.chunks(GROUP).enumerate() {
+                        let rows: Vec<&[f64]> = grp.iter().map(|&(_, i)| row(i)).collect();
+                        let start = g * GROUP * kp;
+                        sq_dists(&rows, &panel, &mut dist[start..start + grp.len() * kp]);
+                    }
+                    for (r, &(_, i)) in computed.iter().enumerate() {
                         let di = closest[i];
-                        let out = &mut dist[(g * GROUP + r) * trials..(g * GROUP + r + 1) * trials];
-                        for t in 0..trials {
-                            let v = buf[r * kp + t];
-                            let useful = 4.0 * di > ccj[t];
-                            out[t] = if useful { v } else { f64::INFINITY };
-                            pots[t] += if useful { v.min(di) } else { di };
+                        let drow = &dist[r * kp..(r + 1) * kp];
+                        for ((a, &v), &l) in acc.iter_mut().zip(drow).zip(&lim) {
+                            let m = if v < di { v } else { di };
+                            *a += if 4.0 * di > l { m } else { di };
                         }
+                    }
+                    for (p, a) in pots.iter_mut().zip(&acc) {
+                        *p += a;
                     }
                 }
                 let positions = computed.iter().map(|&(r, _)| r).collect();
@@ -268,9 +291,9 @@ pub fn kmeans_plusplus(
                     for (r, &i) in members[s..e].iter().enumerate() {
                         let di = closest[i as usize];
                         if next < positions.len() && positions[next] as usize == r {
-                            let v = dist[next * trials + best];
+                            let v = dist[next * kp + best];
                             next += 1;
-                            if v < di {
+                            if 4.0 * di > cc[j * kp + best] && v < di {
                                 movers.push((i, v));
                                 continue;
                             }

@@ -317,7 +317,7 @@ fn run_length(bases: &[usize]) -> usize {
         .windows(2)
         .position(|w| w[1] != w[0] + 1)
         .map_or(bases.len(), |p| p + 1);
-    let uniform = bases.len() % r == 0
+    let uniform = bases.len().is_multiple_of(r)
         && bases
             .chunks_exact(r)
             .all(|c| c.windows(2).all(|w| w[1] == w[0] + 1));
@@ -331,7 +331,7 @@ fn run_length(bases: &[usize]) -> usize {
 /// Gathers runs of `R` adjacent values per time step into `body` (`len` rows).
 #[inline(always)]
 fn gather_runs<const W: usize, const R: usize>(body: &mut [[f64; W]], job: &Job) {
-    debug_assert!(job.bases.len() <= W && job.bases.len() % R == 0);
+    debug_assert!(job.bases.len() <= W && job.bases.len().is_multiple_of(R));
     for (t, row) in body.iter_mut().enumerate() {
         let off = t * job.stride;
         for (j, run) in job.bases.chunks_exact(R).enumerate() {

@@ -20,6 +20,7 @@ use rayon::prelude::*;
 
 use crate::sqdist::{sq_dist, sq_dists, two_nearest, Panel};
 
+pub static DBG: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 /// Rows per parallel task of the bound tests.
 const CHUNK: usize = 2048;
 /// Rows per distance-kernel call.
@@ -31,6 +32,8 @@ const PARTIAL_BYTES: usize = 128 << 20;
 /// Up to this many centres, rows that fail the bound tests are compared with every centre
 /// (cheap); above, only with the centres near their own (restricted scan).
 const DIRECT_MAX_K: usize = 32;
+/// Largest number of per-centre lower bounds kept (f32, 4 bytes each).
+const ELKAN_MAX_BOUNDS: usize = 64 << 20;
 /// Pruning margin, relative to the data diameter.
 const MARGIN: f64 = 1e-11;
 
@@ -63,8 +66,19 @@ pub(crate) fn lloyd(
     let mut n_iter = 0;
     for it in 0..max_iter {
         n_iter = it + 1;
+        let t0 = std::time::Instant::now();
         let changes = st.e_step();
+        let t1 = t0.elapsed();
         let shift = st.m_step(&changes);
+        if std::env::var("KDBG").is_ok() {
+            eprintln!(
+                "it {it} changes {} scans {} e {:?} m {:?}",
+                changes.len(),
+                DBG.swap(0, std::sync::atomic::Ordering::Relaxed),
+                t1,
+                t0.elapsed() - t1
+            );
+        }
         if it > 0 && changes.is_empty() {
             strict = true;
             break;
@@ -107,6 +121,10 @@ struct State<'a> {
     t_upper: Vec<u32>,
     lower: Vec<f64>,
     t_lower: Vec<u32>,
+    /// Elkan-style lower bounds on the distance to every centre (direct mode with few centres):
+    /// `kl` f32 values per row, rounded down, anchored at `t_lower`. `kl == 1` when unused.
+    lowk: Vec<f32>,
+    kl: usize,
     /// Per-cluster coordinate sums (with Neumaier compensation) and counts.
     sums: Vec<f64>,
     comp: Vec<f64>,
@@ -125,6 +143,9 @@ impl<'a> State<'a> {
     ) -> Self {
         let mut hist = vec![Vec::new(); WINDOW + 1];
         hist[0] = init.to_vec();
+        let panel = Panel::from_centers(init, k, d);
+        let elkan = direct && n.saturating_mul(panel.kpad()) <= ELKAN_MAX_BOUNDS;
+        let kl = if elkan { panel.kpad() } else { 1 };
         Self {
             x,
             n,
@@ -134,13 +155,15 @@ impl<'a> State<'a> {
             direct,
             now: 0,
             centers: init.to_vec(),
-            panel: Panel::from_centers(init, k, d),
+            panel,
             hist,
             labels: vec![0; n],
             upper: vec![0.0; n],
             t_upper: vec![0; n],
             lower: vec![0.0; n],
             t_lower: vec![0; n],
+            lowk: vec![f32::INFINITY; n * kl],
+            kl,
             sums: vec![0.0; k * d],
             comp: vec![0.0; k * d],
             counts: vec![0; k],
@@ -164,14 +187,15 @@ impl<'a> State<'a> {
 
     /// First E-step: every row against every centre.
     fn full_scan(&mut self) -> Vec<Change> {
-        let (x, d, k) = (self.x, self.d, self.k);
+        let (x, d, k, kl) = (self.x, self.d, self.k, self.kl);
         let panel = &self.panel;
         self.labels
             .par_chunks_mut(CHUNK)
             .zip(self.upper.par_chunks_mut(CHUNK))
             .zip(self.lower.par_chunks_mut(CHUNK))
+            .zip(self.lowk.par_chunks_mut(CHUNK * kl))
             .enumerate()
-            .for_each(|(b, ((lab, up), lo))| {
+            .for_each(|(b, (((lab, up), lo), lk))| {
                 let kp = panel.kpad();
                 let mut buf = vec![0.0; GROUP * kp];
                 for g in 0..lab.len().div_ceil(GROUP) {
@@ -182,10 +206,14 @@ impl<'a> State<'a> {
                         .collect();
                     sq_dists(&rows, panel, &mut buf);
                     for r in 0..e - s {
-                        let (best, bd, sd) = two_nearest(&buf[r * kp..r * kp + k]);
+                        let dists = &buf[r * kp..r * kp + k];
+                        let (best, bd, sd) = two_nearest(dists);
                         lab[s + r] = best as u32;
                         up[s + r] = bd.sqrt();
                         lo[s + r] = sd.sqrt();
+                        if kl > 1 {
+                            store_bounds(&mut lk[(s + r) * kl..(s + r) * kl + k], dists);
+                        }
                     }
                 }
             });
@@ -204,11 +232,13 @@ impl<'a> State<'a> {
         // largest and second largest per anchor (for the lower bounds).
         let lo_t = now.saturating_sub(WINDOW - 1);
         let span = now - lo_t;
-        let mut disp = vec![0.0; span * k];
+        // Rows of `ks ≥ k` values (zero padding up to the bound width in Elkan mode).
+        let ks = self.kl.max(k);
+        let mut disp = vec![0.0; span * ks];
         let mut dmax = vec![(0.0f64, usize::MAX, 0.0f64); span];
         for t in lo_t..now {
             let old = &self.hist[t % (WINDOW + 1)];
-            let row = &mut disp[(t - lo_t) * k..(t - lo_t + 1) * k];
+            let row = &mut disp[(t - lo_t) * ks..(t - lo_t) * ks + k];
             let (mut m1, mut a1, mut m2) = (0.0f64, usize::MAX, 0.0f64);
             for j in 0..k {
                 let p = sq_dist(&self.centers[j * d..(j + 1) * d], &old[j * d..(j + 1) * d]).sqrt();
@@ -231,6 +261,8 @@ impl<'a> State<'a> {
         let centers = &self.centers;
         let panel = &self.panel;
         let direct = self.direct;
+        let kl = self.kl;
+        let elkan = kl > 1;
         type Pass1 = (Vec<u32>, Vec<Change>, Vec<f64>);
         let pass1: Vec<Pass1> = self
             .labels
@@ -239,8 +271,9 @@ impl<'a> State<'a> {
             .zip(self.t_upper.par_chunks_mut(CHUNK))
             .zip(self.lower.par_chunks_mut(CHUNK))
             .zip(self.t_lower.par_chunks_mut(CHUNK))
+            .zip(self.lowk.par_chunks_mut(CHUNK * kl))
             .enumerate()
-            .map(|(b, ((((lab, up), tu), lo), tl))| {
+            .map(|(b, (((((lab, up), tu), lo), tl), lk))| {
                 let base = b * CHUNK;
                 let row = |i: usize| &x[(base + i) * d..(base + i + 1) * d];
                 let mut scan = Vec::new();
@@ -252,7 +285,7 @@ impl<'a> State<'a> {
                     let ub = if ta == now {
                         up[i]
                     } else {
-                        up[i] + disp[(ta - lo_t) * k + a]
+                        up[i] + disp[(ta - lo_t) * ks + a]
                     };
                     let lb = if tb == now {
                         lo[i]
@@ -261,10 +294,26 @@ impl<'a> State<'a> {
                         lo[i] - if a == a1 { m2 } else { m1 }
                     };
                     let h = half[a];
-                    let m = if lb > h { lb } else { h };
+                    let mut m = if lb > h { lb } else { h };
                     let mut tightened = false;
+                    if elkan && ub + slack >= m {
+                        // Per-centre bounds: min over j ≠ a of l_j - ‖c_j(now) - c_j(t)‖.
+                        let lrow = &lk[i * kl..(i + 1) * kl];
+                        let zero = [0.0; 0];
+                        let dr = if tb == now {
+                            &zero[..]
+                        } else {
+                            &disp[(tb - lo_t) * ks..(tb - lo_t + 1) * ks]
+                        };
+                        let lbk = min_except(lrow, a, dr);
+                        if lbk > m {
+                            m = lbk;
+                        }
+                    }
                     if ub + slack >= m {
                         if direct {
+                            // Few centres: comparing with all of them costs about as much as
+                            // reading the row to tighten u, and refreshes every bound.
                             scan.push(i as u32);
                             continue;
                         }
@@ -273,7 +322,7 @@ impl<'a> State<'a> {
                         tu[i] = now as u32;
                         if u + slack >= m {
                             scan.push(i as u32);
-                            if u > umax[a] {
+                            if !direct && u > umax[a] {
                                 umax[a] = u;
                             }
                             continue;
@@ -289,10 +338,17 @@ impl<'a> State<'a> {
                         if tb == lo_t {
                             lo[i] = lb;
                             tl[i] = now as u32;
+                            if elkan {
+                                let dr = &disp[(tb - lo_t) * ks..(tb - lo_t) * ks + k];
+                                for (l, &p) in lk[i * kl..i * kl + k].iter_mut().zip(dr) {
+                                    *l = round_down(*l as f64 - p);
+                                }
+                            }
                         }
                     }
                 }
                 let mut changes = Vec::new();
+                DBG.fetch_add(scan.len(), std::sync::atomic::Ordering::Relaxed);
                 if direct && !scan.is_empty() {
                     let kp = panel.kpad();
                     let mut buf = vec![0.0; GROUP.min(scan.len()) * kp];
@@ -301,7 +357,11 @@ impl<'a> State<'a> {
                         sq_dists(&rows, panel, &mut buf);
                         for (r, &i) in grp.iter().enumerate() {
                             let i = i as usize;
-                            let (best, bd, sd) = two_nearest(&buf[r * kp..r * kp + k]);
+                            let dists = &buf[r * kp..r * kp + k];
+                            let (best, bd, sd) = two_nearest(dists);
+                            if elkan {
+                                store_bounds(&mut lk[i * kl..i * kl + k], dists);
+                            }
                             if best as u32 != lab[i] {
                                 changes.push(((base + i) as u32, lab[i], best as u32));
                                 lab[i] = best as u32;
@@ -585,6 +645,64 @@ impl<'a> State<'a> {
             .collect();
         parts.iter().sum()
     }
+}
+
+/// `x` as an f32 that is never above it (a lower bound stays a lower bound): moving `x` down
+/// by 2⁻²² of its magnitude first outweighs the 2⁻²⁴ relative rounding of the conversion.
+/// Branch-free, so loops over it vectorize.
+#[inline]
+fn round_down(x: f64) -> f32 {
+    (x - x.abs() * (1.0 / 4_194_304.0)) as f32
+}
+
+/// Per-centre lower bounds from squared distances.
+#[inline]
+fn store_bounds(dst: &mut [f32], sq: &[f64]) {
+    for (l, &v) in dst.iter_mut().zip(sq) {
+        *l = round_down(v.sqrt());
+    }
+}
+
+/// `min_{j ≠ skip} (bounds[j] - disp[j])` over the `bounds.len()` values (a multiple of 8;
+/// `disp` empty means zero displacement, else as long as `bounds`).
+#[inline]
+fn min_except(bounds: &[f32], skip: usize, disp: &[f64]) -> f64 {
+    assert!(disp.is_empty() || disp.len() == bounds.len());
+    #[cfg(target_arch = "x86_64")]
+    if crate::sqdist::detected_level() == crate::sqdist::Level::Avx512 && bounds.len() % 8 == 0 {
+        // SAFETY: AVX-512F detected; lengths checked above.
+        return unsafe { min_except512(bounds, skip, disp) };
+    }
+    let mut m = f64::INFINITY;
+    for (j, &l) in bounds.iter().enumerate() {
+        let v = l as f64 - disp.get(j).copied().unwrap_or(0.0);
+        if j != skip && v < m {
+            m = v;
+        }
+    }
+    m
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn min_except512(bounds: &[f32], skip: usize, disp: &[f64]) -> f64 {
+    use std::arch::x86_64::*;
+    let mut m = _mm512_set1_pd(f64::INFINITY);
+    let mut j = 0;
+    while j < bounds.len() {
+        let mut v = _mm512_cvtps_pd(_mm256_loadu_ps(bounds.as_ptr().add(j)));
+        if !disp.is_empty() {
+            v = _mm512_sub_pd(v, _mm512_loadu_pd(disp.as_ptr().add(j)));
+        }
+        let keep: __mmask8 = if skip >= j && skip < j + 8 {
+            !(1u8 << (skip - j))
+        } else {
+            0xff
+        };
+        m = _mm512_mask_min_pd(m, keep, m, v);
+        j += 8;
+    }
+    _mm512_reduce_min_pd(m)
 }
 
 /// `s + c += y`, keeping the rounding error of `s + y` in `c` (Knuth's branch-free TwoSum).

@@ -20,7 +20,7 @@ fn check(values: &[f64], channels: usize, starts: &[f64], ends: &[f64], n: usize
             "values is empty: need at least two frames and one channel".into(),
         ));
     }
-    if values.len() % channels != 0 {
+    if !values.len().is_multiple_of(channels) {
         return Err(Error::Shape(format!(
             "values has {} entries, not a multiple of {channels} channels",
             values.len()
@@ -348,7 +348,9 @@ mod tests {
         // Pseudo-random values, 1..=9 channels, segments ending on the last frame, odd n.
         let mut state = 99u64;
         let mut next = || {
-            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
             (state >> 11) as f64 / (1u64 << 53) as f64
         };
         for channels in 1..=9 {

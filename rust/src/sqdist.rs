@@ -181,6 +181,41 @@ pub fn sq_dists_at(level: Level, rows: &[&[f64]], panel: &Panel, out: &mut [f64]
     }
 }
 
+/// One k-means++ step on a block of rows against a panel of at most 8 candidates
+/// (`kpad == 8`): `out[r * 8 + t] = ‖rows[r] - t‖²` (as [`sq_dists`]) and, for every
+/// candidate `t`, `pots[t] += min(out[r * 8 + t], closest[r])` when `4·closest[r] > lim[t]`
+/// (the candidate may bring the row closer), else `+= closest[r]`; rows are added in order, so
+/// every instruction set gives the same bits.
+pub fn seed_block(
+    rows: &[&[f64]],
+    closest: &[f64],
+    panel: &Panel,
+    lim: &[f64; 8],
+    out: &mut [f64],
+    pots: &mut [f64; 8],
+) {
+    assert_eq!(
+        panel.kpad, 8,
+        "seed_block needs a panel of at most 8 candidates"
+    );
+    assert!(closest.len() == rows.len() && out.len() >= rows.len() * 8);
+    assert!(rows.iter().all(|r| r.len() >= panel.d));
+    #[cfg(target_arch = "x86_64")]
+    if detected_level() == Level::Avx512 {
+        // SAFETY: AVX-512F detected; rows hold d values; out holds rows.len() × 8.
+        unsafe { x86::seed512(rows, closest, panel.d, panel.data.as_ptr(), lim, out, pots) };
+        return;
+    }
+    sq_dists(rows, panel, out);
+    for (r, &di) in closest.iter().enumerate() {
+        for t in 0..8 {
+            let v = out[r * 8 + t];
+            let m = if v < di { v } else { di };
+            pots[t] += if 4.0 * di > lim[t] { m } else { di };
+        }
+    }
+}
+
 /// `‖a - b‖²` over the first `d` values, any summation order (used for bounds only).
 pub fn sq_dist(a: &[f64], b: &[f64]) -> f64 {
     let d = a.len().min(b.len());
@@ -367,6 +402,59 @@ mod x86 {
         _mm256_fmadd_pd
     );
 
+    /// [`super::seed_block`] with AVX-512: 8 rows × 8 candidates per register tile, the
+    /// potential update fused in the epilogue.
+    ///
+    /// # Safety
+    /// AVX-512F available; every row readable for `d` values; `panel` is `d × 8`; `out` holds
+    /// `rows.len() × 8` values.
+    #[target_feature(enable = "avx512f")]
+    pub(super) unsafe fn seed512(
+        rows: &[&[f64]],
+        closest: &[f64],
+        d: usize,
+        panel: *const f64,
+        lim: &[f64; 8],
+        out: &mut [f64],
+        pots: &mut [f64; 8],
+    ) {
+        const P: usize = 8;
+        const AHEAD: usize = 4;
+        let limv = _mm512_loadu_pd(lim.as_ptr());
+        let four = _mm512_set1_pd(4.0);
+        let mut pacc = _mm512_loadu_pd(pots.as_ptr());
+        for r in rows.iter().take(AHEAD * P) {
+            super::prefetch_row(r);
+        }
+        let n = rows.len();
+        let mut b = 0;
+        while b < n {
+            for r in rows.iter().skip(b + AHEAD * P).take(P) {
+                super::prefetch_row(r);
+            }
+            let valid = (n - b).min(P);
+            let ptrs: [*const f64; P] =
+                std::array::from_fn(|p| rows[b + if p < valid { p } else { 0 }].as_ptr());
+            let mut acc = [_mm512_setzero_pd(); P];
+            for j in 0..d {
+                let c = _mm512_loadu_pd(panel.add(j * 8));
+                for p in 0..P {
+                    let t = _mm512_sub_pd(_mm512_set1_pd(*ptrs[p].add(j)), c);
+                    acc[p] = _mm512_fmadd_pd(t, t, acc[p]);
+                }
+            }
+            for p in 0..valid {
+                let di = _mm512_set1_pd(closest[b + p]);
+                let m = _mm512_min_pd(acc[p], di);
+                let useful = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(_mm512_mul_pd(four, di), limv);
+                pacc = _mm512_add_pd(pacc, _mm512_mask_blend_pd(useful, di, m));
+                _mm512_storeu_pd(out.as_mut_ptr().add((b + p) * 8), acc[p]);
+            }
+            b += P;
+        }
+        _mm512_storeu_pd(pots.as_mut_ptr(), pacc);
+    }
+
     /// Lane-wise best/second/index over full vectors, then a cross-lane merge and a scalar
     /// tail; same result as the sequential scan.
     ///
@@ -552,6 +640,35 @@ mod tests {
                 assert_eq!(two_nearest(&v), reference(&v), "{v:?}");
             }
         }
+    }
+
+    #[test]
+    fn seed_block_matches_its_definition() {
+        let d = 7;
+        let x = values(37 * d, 5);
+        let cands = values(6 * d, 6);
+        let panel = Panel::from_centers(&cands, 6, d);
+        let rows: Vec<&[f64]> = x.chunks_exact(d).collect();
+        let closest: Vec<f64> = values(37, 7).iter().map(|v| v.abs() * 30.0).collect();
+        let lim = [1.0, 50.0, 0.0, 1e9, 20.0, 3.0, f64::INFINITY, f64::INFINITY];
+        let mut out = vec![0.0; 37 * 8];
+        let mut pots = [1.0; 8];
+        seed_block(&rows, &closest, &panel, &lim, &mut out, &mut pots);
+        let mut want = vec![0.0; 37 * 8];
+        sq_dists_at(Level::Scalar, &rows, &panel, &mut want);
+        let mut want_pots = [1.0; 8];
+        for r in 0..37 {
+            for t in 0..8 {
+                assert_eq!(out[r * 8 + t].to_bits(), want[r * 8 + t].to_bits());
+                let v = want[r * 8 + t];
+                want_pots[t] += if 4.0 * closest[r] > lim[t] {
+                    v.min(closest[r])
+                } else {
+                    closest[r]
+                };
+            }
+        }
+        assert_eq!(pots, want_pots);
     }
 
     #[test]

@@ -60,6 +60,14 @@ fn all_finite(x: &[f64]) -> bool {
     acc.iter().sum::<f64>() + tail == 0.0
 }
 
+/// Whether consecutive samples need the exact rules: not both non-zero of one sign (a sign
+/// change, a zero, or a product that underflows to zero).
+#[inline(always)]
+#[allow(clippy::neg_cmp_op_on_partial_ord)] // the negation also flags NaN; clearer than partial_cmp
+fn flagged(cur: f64, prev: f64) -> bool {
+    !(cur * prev > 0.0)
+}
+
 /// Per-channel state of the scan of one trial.
 #[derive(Clone, Copy, Default)]
 struct ChannelState {
@@ -108,9 +116,9 @@ fn scan_trial(
                 // Sums kept in registers: one add per value, the channels in parallel.
                 let mut acc = [0.0f64; 8];
                 for (row, out) in vel.chunks_exact(c_n).zip(cum.chunks_exact_mut(c_n)) {
-                    for c in 0..c_n {
-                        acc[c] += row[c];
-                        out[c] = acc[c];
+                    for ((a, &v), o) in acc.iter_mut().zip(row).zip(out.iter_mut()) {
+                        *a += v;
+                        *o = *a;
                     }
                 }
             } else {
@@ -170,7 +178,7 @@ fn scan_trial(
         let prev: &[f64; CHUNK] = vel[i - c_n..i - c_n + CHUNK].try_into().expect("chunk");
         let mut mask = 0u32;
         for k in 0..CHUNK {
-            mask |= ((!(cur[k] * prev[k] > 0.0)) as u32) << k;
+            mask |= (flagged(cur[k], prev[k]) as u32) << k;
         }
         while mask != 0 {
             handle(i + mask.trailing_zeros() as usize);
@@ -179,7 +187,7 @@ fn scan_trial(
         i += CHUNK;
     }
     while i < n {
-        if !(vel[i] * vel[i - c_n] > 0.0) {
+        if flagged(vel[i], vel[i - c_n]) {
             handle(i);
         }
         i += 1;
@@ -204,7 +212,7 @@ fn check_inputs(
             "velocity is empty: need at least one frame and one channel".into(),
         ));
     }
-    if velocity.len() % channels != 0 {
+    if !velocity.len().is_multiple_of(channels) {
         return Err(Error::Shape(format!(
             "velocity has {} values, not a multiple of {channels} channels",
             velocity.len()

@@ -30,7 +30,7 @@ from visprim.report import figures
 from visprim.report.html import Page, figure, paragraph, pre, table
 from visprim.segment import corpus_boundary_scores, seg2_trace, zvc
 from visprim.trial import Trial
-from visprim.vectors import corpus_vectors, stretch, to_curves
+from visprim.vectors import corpus_vectors, stretch
 
 __all__ = ["Report", "segmentation_scores", "write_report"]
 
@@ -315,8 +315,9 @@ def _trial_figures(
     p = model.transform(sv.vectors)
     mask = (times >= s) & (times <= e)
     tt = times[mask]
-    curve_p = to_curves(model._reconstruct_vectors(p, "projection"))[0]
-    curve_c = to_curves(model._reconstruct_vectors(p, "cluster"))[0]
+    # to_trial_angles adds the segment's whole-turn offsets of γ/α back (visprim.vectors).
+    curve_p = sv.to_trial_angles(model._reconstruct_vectors(p, "projection"))[0]
+    curve_c = sv.to_trial_angles(model._reconstruct_vectors(p, "cluster"))[0]
     label = int(model.assign(p)[0][0])
     rp = stretch(curve_p, s, e, tt)
     rc = stretch(curve_c, s, e, tt)

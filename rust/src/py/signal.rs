@@ -169,7 +169,7 @@ fn butter_sos<'py>(
     let sos = filter::butter_sos(order as usize, cutoff)?;
     let n = sos.len();
     let flat: Vec<f64> = sos.into_iter().flatten().collect();
-    Ok(PyArray1::from_vec(py, flat).reshape([n, 6])?)
+    PyArray1::from_vec(py, flat).reshape([n, 6])
 }
 
 /// scipy's default `padlen` of `sosfiltfilt` for this filter (samples of odd extension at each
@@ -337,7 +337,7 @@ fn resample_segments<'py>(
     let ends: &[f64] = &ends;
     let out = py.detach(|| resample::resample_segments(data, channels, starts, ends, n))?;
     let rows = starts.len();
-    Ok(PyArray1::from_vec(py, out).reshape([rows, channels * n])?)
+    PyArray1::from_vec(py, out).reshape([rows, channels * n])
 }
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
