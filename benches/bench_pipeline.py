@@ -6,18 +6,21 @@ SEG-1 → every segment resampled to 100 samples per angle (400-D) → PCA keepi
 eigenvectors → k-means with 30 clusters (k-means++ seeding, 4 restarts, Lloyd, float64).
 
 Both pipelines start from the same inverse-kinematics angles (computed once, untimed) and
-share the code that is plain numpy in visprim too (velocities by ``np.gradient`` on the real
-timestamps, the SEG-1 grouping of crossings into events). They differ where visprim uses
-its Rust kernels:
+share the conversion of crossing frames to seconds (numpy in visprim too). They differ where
+visprim uses its Rust kernels:
 
 ============  =====================================  =========================================
 stage         visprim                                reference
 ============  =====================================  =========================================
 filter        ``sosfiltfilt_ragged`` (one call)      ``scipy.signal.sosfiltfilt`` on 3-D stacks
                                                      of equal-length trials (batched by length)
+velocity      ``gradient_ragged``                    ``np.gradient``'s uneven-step formula on
+                                                     the whole corpus (one numpy pass)
 ZVC           ``zero_velocity_crossings_ragged``     numpy: sign changes on the whole corpus,
                                                      then the significant-movement walk batched
                                                      over all (trial, angle) series
+SEG-1         ``seg1_events``, ``times_to_frames``   numpy: lexsort by (trial, time), events by
+                                                     cumsum/bincount, ``searchsorted`` frames
 resample      ``resample_segments``                  ``np.interp`` per angle on the corpus
 PCA           ``covariance`` + ``eigh``              ``sklearn PCA(svd_solver="covariance_eigh")``
 k-means       ``kmeans``                             ``sklearn KMeans(algorithm="lloyd")``
@@ -50,9 +53,7 @@ from visprim.filtering import lowpass_concatenated
 from visprim.ik import arm_angles_corpus
 from visprim.pca import fit_pca
 from visprim.segment import segment_concatenated
-from visprim.segment.clock import frames_to_times, times_to_frames
-from visprim.segment.seg1 import seg1_from_crossings
-from visprim.segment.velocity import velocity_concatenated
+from visprim.segment.clock import frames_to_times
 from visprim.segment.zvc import CorpusCrossings
 
 ORDER, CUTOFF, MIN_CHANGE_DEG, N_SAMPLES, F, K, N_INIT, SEED = 10, 0.25, 5.0, 100, 30, 30, 4, 0
@@ -105,9 +106,29 @@ def ref_filter(angles, offsets):
     return out
 
 
+def ref_velocity(times, x, offsets):
+    """``np.gradient(x_i, times_i, axis=0)`` of every trial in one numpy pass over the corpus
+    (the uneven-step weights of ``np.gradient``; one-sided differences at each trial's ends)."""
+    n = x.shape[0]
+    ends = np.append(offsets[1:], n) - 1  # last frame of each trial
+    h = np.diff(times)  # across trial joins meaningless but unused
+    v = np.empty_like(x)
+    h0, h1 = h[:-1], h[1:]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w_prev = (-h1 / (h0 * (h0 + h1)))[:, None]
+        w_here = ((h1 - h0) / (h0 * h1))[:, None]
+        w_next = (h0 / (h1 * (h0 + h1)))[:, None]
+    np.multiply(w_prev, x[:-2], out=v[1:-1])
+    v[1:-1] += w_here * x[1:-1]
+    v[1:-1] += w_next * x[2:]
+    v[offsets] = (x[offsets + 1] - x[offsets]) / h[offsets, None]
+    v[ends] = (x[ends] - x[ends - 1]) / h[ends - 1, None]
+    return v
+
+
 def ref_crossings(times, angles, offsets, min_change_deg):
     """ZVCs with the significant-movement rule, in numpy (same definition as the kernel)."""
-    vel = velocity_concatenated(times, angles, offsets)
+    vel = ref_velocity(times, angles, offsets)
     n, c = vel.shape
     trial_of = np.repeat(np.arange(offsets.size), np.diff(np.append(offsets, n)))
     same = trial_of[1:] == trial_of[:-1]
@@ -144,6 +165,41 @@ def ref_crossings(times, angles, offsets, min_change_deg):
     return CorpusCrossings(tr, ch, frame, frames_to_times(times, offsets, tr, frame))
 
 
+def ref_seg1(crossings, window=0.3, min_dofs=2):
+    """SEG-1 segments ``(trial, start s, end s)`` from the ZVCs, in numpy: crossings sorted by
+    (trial, time), events by single linkage (gap < window), median times, distinct DOFs."""
+    order = np.lexsort((crossings.time, crossings.trial))
+    trial, time, dof = crossings.trial[order], crossings.time[order], crossings.dof[order]
+    new = np.ones(trial.size, dtype=bool)
+    new[1:] = (trial[1:] != trial[:-1]) | (np.diff(time) >= window)
+    event = np.cumsum(new) - 1
+    m = int(event[-1]) + 1
+    counts = np.bincount(event, minlength=m)
+    first = np.flatnonzero(new)
+    median_time = 0.5 * (time[first + (counts - 1) // 2] + time[first + counts // 2])
+    n_dof = int(dof.max()) + 1
+    pairs = np.unique(event * n_dof + dof)
+    snip = np.bincount(pairs // n_dof, minlength=m) >= min_dofs
+    ev_trial = trial[new]
+    keep = (ev_trial[1:] == ev_trial[:-1]) & snip[1:] & snip[:-1]
+    return ev_trial[:-1][keep], median_time[:-1][keep], median_time[1:][keep]
+
+
+def ref_times_to_frames(times, offsets, trial, t):
+    """Fractional frames (relative to each trial's start) of times, by ``np.searchsorted`` on
+    the corpus's timestamps made increasing across trials."""
+    n = times.shape[0]
+    last = np.append(offsets[1:], n) - 1
+    trial_of = np.repeat(np.arange(offsets.size), last - offsets + 1)
+    local = times - times[offsets][trial_of]
+    span = float(local.max()) + 1.0
+    key = local + trial_of * span  # increasing over the whole corpus
+    q = np.clip(t - times[offsets][trial], 0.0, local[last][trial]) + trial * span
+    i = np.clip(np.searchsorted(key, q, side="right") - 1, offsets[trial], last[trial] - 1)
+    frac = (q - key[i]) / (key[i + 1] - key[i])
+    return (i - offsets[trial]) + np.clip(frac, 0.0, 1.0)
+
+
 def ref_resample(values, starts, ends, n):
     """np.interp per angle on the whole corpus (channel-major output)."""
     grid = starts[:, None] + (ends - starts)[:, None] * np.linspace(0.0, 1.0, n)[None, :]
@@ -156,10 +212,10 @@ def ref_resample(values, starts, ends, n):
 def reference_pipeline(times, angles, offsets):
     filtered = ref_filter(angles, offsets)
     crossings = ref_crossings(times, filtered, offsets, MIN_CHANGE_DEG)
-    trial, start, end = seg1_from_crossings(crossings)
+    trial, start, end = ref_seg1(crossings)
     base = offsets[trial].astype(np.float64)
-    starts = base + times_to_frames(times, offsets, trial, start)
-    ends = base + times_to_frames(times, offsets, trial, end)
+    starts = base + ref_times_to_frames(times, offsets, trial, start)
+    ends = base + ref_times_to_frames(times, offsets, trial, end)
     vectors = ref_resample(filtered, starts, ends, N_SAMPLES)
     pca = PCA(n_components=F, svd_solver="covariance_eigh")
     proj = pca.fit_transform(vectors)
@@ -252,7 +308,7 @@ def stage_timings(times, angles, offsets) -> list[tuple[str, str, float]]:
     timed(
         "ZVC+SEG-1",
         "numpy",
-        lambda: seg1_from_crossings(ref_crossings(times, f2, offsets, MIN_CHANGE_DEG)),
+        lambda: ref_seg1(ref_crossings(times, f2, offsets, MIN_CHANGE_DEG)),
     )
     s, e = seg.global_frames()
     v = timed("resample", "visprim", lambda: kernels.resample_segments(f1, s, e, n=N_SAMPLES))

@@ -137,7 +137,9 @@ fn block_bench<const W: usize>(
 
 fn bench_block(c: &mut Criterion) {
     let mut g = c.benchmark_group("block");
-    g.sample_size(30).measurement_time(Duration::from_secs(2));
+    g.sample_size(30)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(1));
     block_bench::<8>(&mut g);
     block_bench::<16>(&mut g);
     block_bench::<32>(&mut g);

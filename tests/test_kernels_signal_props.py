@@ -10,7 +10,8 @@ from hypothesis.extra.numpy import arrays
 from test_kernels_signal import resample_reference, zvc_reference
 from visprim import kernels as K
 
-SETTINGS = settings(max_examples=60, deadline=None)
+# Fixed example sequence (derandomize) so CI runs are reproducible.
+SETTINGS = settings(max_examples=60, deadline=None, derandomize=True)
 finite = st.floats(-100.0, 100.0, allow_nan=False, allow_infinity=False)
 # Velocities with exact zeros, tiny values whose products underflow, and ordinary values.
 velocity_values = st.one_of(

@@ -16,6 +16,11 @@ def sosfiltfilt_ragged(
     offsets: NDArray[np.int64],
     padlen: int | None = None,
 ) -> NDArray[np.float64]: ...
+def gradient_ragged(
+    times: NDArray[np.float64],
+    values: NDArray[np.float64],
+    offsets: NDArray[np.int64],
+) -> NDArray[np.float64]: ...
 def zero_velocity_crossings(
     velocity: NDArray[np.float64],
     min_change: float = 0.0,
@@ -27,6 +32,18 @@ def zero_velocity_crossings_ragged(
     min_change: float = 0.0,
     positions: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]: ...
+def seg1_events(
+    trial: NDArray[np.int64],
+    channel: NDArray[np.int64],
+    time: NDArray[np.float64],
+    window: float,
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.int64]]: ...
+def times_to_frames(
+    times: NDArray[np.float64],
+    offsets: NDArray[np.int64],
+    trial: NDArray[np.int64],
+    t: NDArray[np.float64],
+) -> NDArray[np.float64]: ...
 def resample_segments(
     values: NDArray[np.float64],
     starts: NDArray[np.float64],

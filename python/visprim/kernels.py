@@ -118,6 +118,31 @@ def sosfiltfilt_ragged(
     return _visprim.sosfiltfilt_ragged(_f64(sos), _f64(values), _offsets(offsets), padlen)
 
 
+def gradient_ragged(times: ArrayLike, values: ArrayLike, offsets: ArrayLike) -> _F64:
+    """Time derivative of every trial of a concatenated corpus on its own timestamps.
+
+    Per trial, equal (bit for bit) to ``numpy.gradient(values_i, times_i, axis=0)``:
+    second-order central differences for uneven steps inside, one-sided first-order
+    differences at the first and last frame. NaN or infinity in ``values`` propagates (as in
+    numpy).
+
+    Args:
+        times: ``(total_frames,)`` float64 seconds, each trial's clock, strictly increasing
+            within a trial.
+        values: ``(total_frames, channels)`` float64 (1-D: one channel), e.g. radians.
+        offsets: first frame of each trial (as in :func:`sosfiltfilt_ragged`); every trial
+            needs at least 2 frames.
+
+    Returns:
+        Array of the shape of ``values``, in units of ``values`` per second.
+
+    Raises:
+        ValueError: shapes that do not match, invalid offsets, a trial of fewer than 2 frames,
+            timestamps that are not finite or not strictly increasing in a trial.
+    """
+    return _visprim.gradient_ragged(_f64(times), _f64(values), _offsets(offsets))
+
+
 def zero_velocity_crossings(
     velocity: ArrayLike, min_change: float = 0.0, positions: ArrayLike | None = None
 ) -> tuple[_F64, _I64]:
@@ -170,6 +195,49 @@ def zero_velocity_crossings_ragged(
     return _visprim.zero_velocity_crossings_ragged(
         _f64(velocity), _offsets(offsets), float(min_change), pos
     )
+
+
+def seg1_events(
+    trial: ArrayLike, channel: ArrayLike, time: ArrayLike, window: float
+) -> tuple[_I64, _F64, _I64]:
+    """Group zero-velocity crossings of all channels into SEG-1 events, per trial.
+
+    Within a trial the crossings are taken in time order (ties keep their input order); a
+    crossing less than ``window`` seconds after the previous one joins its event (single
+    linkage), a gap ``>= window`` starts a new event. Events never span two trials.
+
+    Args:
+        trial: int64 ``(n,)`` trial of each crossing, non-decreasing (grouped by trial).
+        channel: int64 ``(n,)`` channel (DOF) of each crossing, ``>= 0``.
+        time: float64 ``(n,)`` seconds on the trial's clock (finite).
+        window: seconds, > 0.
+
+    Returns:
+        ``(trial, time, n_channels)`` per event, sorted by trial then time: int64 trial, the
+        float64 median time (seconds) of the event's crossings (mean of the two middle ones
+        for an even count) and the int64 number of distinct channels among them.
+    """
+    return _visprim.seg1_events(_offsets(trial), _offsets(channel), _f64(time), float(window))
+
+
+def times_to_frames(times: ArrayLike, offsets: ArrayLike, trial: ArrayLike, t: ArrayLike) -> _F64:
+    """Fractional frame indices of times on a concatenated corpus's own timestamps.
+
+    ``t[i]`` (seconds on the clock of trial ``trial[i]``) is clamped to that trial's first and
+    last timestamps and located by linear interpolation between the two frames around it.
+
+    Args:
+        times: ``(total_frames,)`` float64 seconds, strictly increasing within each queried
+            trial.
+        offsets: first frame of each trial (as in :func:`sosfiltfilt_ragged`).
+        trial: int64 ``(m,)`` trial index of each query.
+        t: float64 ``(m,)`` seconds.
+
+    Returns:
+        float64 ``(m,)`` fractional frames relative to each trial's first frame, in
+        ``[0, n_frames_of_trial - 1]``.
+    """
+    return _visprim.times_to_frames(_f64(times), _offsets(offsets), _offsets(trial), _f64(t))
 
 
 def resample_segments(values: ArrayLike, starts: ArrayLike, ends: ArrayLike, n: int = 100) -> _F64:

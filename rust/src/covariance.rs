@@ -71,11 +71,13 @@ impl Moments {
                 block_moments(&x[start * dim..end * dim], end - start, dim)
             })
             .collect();
+        // The parts hold lower triangles only: merge those, mirror once.
         let mut iter = partials.into_iter();
         let mut acc = iter.next().expect("at least one part");
         for part in iter {
-            acc.merge(&part)?;
+            acc.merge_lower(&part);
         }
+        symmetrize_from_lower(&mut acc.scatter, dim);
         Ok(acc)
     }
 
@@ -146,12 +148,21 @@ impl Moments {
                 other.dim, self.dim
             )));
         }
+        self.merge_lower(other);
+        // The update adds wi·δj at (i, j) and wj·δi at (j, i): equal in exact arithmetic but
+        // not always in floating point; mirror the lower triangle to stay exactly symmetric.
+        symmetrize_from_lower(&mut self.scatter, self.dim);
+        Ok(())
+    }
+
+    /// [`Moments::merge`] on the lower triangle of the scatter only (same dimension assumed).
+    fn merge_lower(&mut self, other: &Moments) {
         if other.count == 0 {
-            return Ok(());
+            return;
         }
         if self.count == 0 {
             *self = other.clone();
-            return Ok(());
+            return;
         }
         let d = self.dim;
         let na = self.count as f64;
@@ -159,25 +170,19 @@ impl Moments {
         let n = na + nb;
         let delta: Vec<f64> = (0..d).map(|i| other.mean[i] - self.mean[i]).collect();
         let w = na * nb / n;
-        for i in 0..d {
-            let wi = w * delta[i];
-            let (srow, orow) = (
-                &mut self.scatter[i * d..(i + 1) * d],
-                &other.scatter[i * d..],
-            );
-            for j in 0..d {
-                srow[j] += orow[j] + wi * delta[j];
+        for (i, &di) in delta.iter().enumerate() {
+            let wi = w * di;
+            let srow = &mut self.scatter[i * d..i * d + i + 1];
+            let orow = &other.scatter[i * d..i * d + i + 1];
+            for ((s, o), dj) in srow.iter_mut().zip(orow).zip(&delta) {
+                *s += o + wi * dj;
             }
         }
-        // The update adds wi·δj at (i, j) and wj·δi at (j, i): equal in exact arithmetic but
-        // not always in floating point; keep the matrix exactly symmetric.
-        symmetrize_from_lower(&mut self.scatter, d);
         let fb = nb / n;
         for (m, dl) in self.mean.iter_mut().zip(&delta) {
             *m += dl * fb;
         }
         self.count += other.count;
-        Ok(())
     }
 
     /// Covariance with divisor N (`scatter / count`), row-major `dim × dim`.
@@ -226,14 +231,21 @@ fn check_rows(x: &[f64], n: usize, dim: usize, name: &str) -> Result<()> {
 
 /// Copy the lower triangle of a row-major `d × d` matrix onto its upper triangle.
 fn symmetrize_from_lower(a: &mut [f64], d: usize) {
-    for i in 0..d {
-        for j in 0..i {
-            a[j * d + i] = a[i * d + j];
+    // In 32 × 32 tiles, so that the strided writes stay in cache.
+    const T: usize = 32;
+    for i0 in (0..d).step_by(T) {
+        for j0 in (0..=i0).step_by(T) {
+            for i in i0..(i0 + T).min(d) {
+                for j in j0..(j0 + T).min(i) {
+                    a[j * d + i] = a[i * d + j];
+                }
+            }
         }
     }
 }
 
-/// Sequential statistics of one block of rows (`n ≥ 1`).
+/// Sequential statistics of one block of rows (`n ≥ 1`); only the lower triangle of the
+/// scatter matrix is filled.
 fn block_moments(x: &[f64], n: usize, d: usize) -> Moments {
     // Shift: mean of the first rows, close to the block mean for any reasonable data.
     let ns = n.min(SHIFT_ROWS);
@@ -290,7 +302,6 @@ fn block_moments(x: &[f64], n: usize, d: usize) -> Moments {
             scatter[i * d + j] = gram[j * d + i] - nf * m[i] * m[j];
         }
     }
-    symmetrize_from_lower(&mut scatter, d);
     let mean = shift.iter().zip(&m).map(|(s, mi)| s + mi).collect();
     Moments {
         dim: d,

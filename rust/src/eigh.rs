@@ -5,7 +5,9 @@
 //! span the right subspace but their basis inside it is whatever the solver returns.
 //!
 //! Like `numpy.linalg.eigh` (`UPLO='L'`) only the lower triangle `a[i, j], i ≥ j` is read once
-//! the matrix has been checked to be symmetric.
+//! the matrix has been checked to be symmetric. The matrix is scaled by a power of two and
+//! entries below 1.5e-154 of the largest are flushed to zero before the solver runs (see
+//! [`eigh`]).
 
 use faer::diag::Diag;
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -45,7 +47,29 @@ pub fn eigh(a: &[f64], d: usize, k: Option<usize>) -> Result<Eigh> {
         }
     };
     let par = if d >= 128 { Par::rayon(0) } else { Par::Seq };
-    let mat = MatRef::from_row_major_slice(a, d, d);
+    // Scale by a power of two (exact) so the largest entry is about 1, and flush entries
+    // below √(f64::MIN_POSITIVE) ≈ 1.5e-154 of it to zero: their squares underflow inside the
+    // solver (which then fails to converge), and dropping them moves the eigenvalues by at
+    // most d·1.5e-154·max|a|, far below rounding.
+    let amax = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let scale = if amax > 0.0 {
+        (-amax.log2().round()).exp2()
+    } else {
+        1.0
+    };
+    let tiny = f64::MIN_POSITIVE.sqrt();
+    let scaled: Vec<f64> = a
+        .iter()
+        .map(|&v| {
+            let w = v * scale;
+            if w.abs() < tiny {
+                0.0
+            } else {
+                w
+            }
+        })
+        .collect();
+    let mat = MatRef::from_row_major_slice(&scaled, d, d);
     let mut u = Mat::<f64>::zeros(d, d);
     let mut s = Diag::<f64>::zeros(d);
     let params = Default::default();
@@ -70,7 +94,7 @@ pub fn eigh(a: &[f64], d: usize, k: Option<usize>) -> Result<Eigh> {
     let mut vectors = vec![0.0; d * k];
     for c in 0..k {
         let src = d - 1 - c;
-        values.push(s[src]);
+        values.push(s[src] / scale);
         let col = u.col(src);
         let mut pivot = 0;
         for i in 1..d {
@@ -194,6 +218,27 @@ mod tests {
         for i in 0..d {
             assert_eq!(lead.vectors[i * 5..i * 5 + 5], e.vectors[i * d..i * d + 5]);
         }
+    }
+
+    #[test]
+    fn tiny_entries_next_to_large_ones() {
+        // Found by a property test: an entry of 2.5e-275 next to 1.0 made the solver fail.
+        let d = 7;
+        let mut a = vec![0.0; d * d];
+        a[3] = 1.25e-275;
+        a[3 * d] = 1.25e-275;
+        a[2 * d + 5] = 0.5;
+        a[5 * d + 2] = 0.5;
+        let e = eigh(&a, d, None).unwrap();
+        assert!((e.values[0] - 0.5).abs() < 1e-15 && (e.values[d - 1] + 0.5).abs() < 1e-15);
+        // Huge entries: scaling keeps the solver away from overflow.
+        let big = [1e300, 2e299, 2e299, 1e300];
+        let e = eigh(&big, 2, None).unwrap();
+        assert!((e.values[0] / 1.2e300 - 1.0).abs() < 1e-14);
+        assert!((e.values[1] / 0.8e300 - 1.0).abs() < 1e-14);
+        // Subnormal input.
+        let e = eigh(&[2.225e-313], 1, None).unwrap();
+        assert_eq!(e.values, vec![2.225e-313]);
     }
 
     #[test]

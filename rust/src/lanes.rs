@@ -2,22 +2,25 @@
 //!
 //! The biquad recursion of ONE signal is latency-bound (each output needs the previous state,
 //! two dependent multiply-adds per sample and section). Here up to 32 signals (see
-//! [`lanes_at`]) of equal length are copied into a lane-major block (`buf[t][lane]`, odd extension included), and the
-//! recursion runs section by section over the block with the lanes innermost, so the inner loop
-//! is plain element-wise SIMD over lanes and the lanes' dependency chains overlap. Blocks are
-//! distributed over threads with rayon.
+//! [`lanes_at`]) of equal length are copied into a lane-major block (`buf[t][lane]`, odd
+//! extension included), and the recursion runs over the block with the lanes innermost, so the
+//! inner loop is plain element-wise SIMD over lanes and the lanes' dependency chains overlap.
+//! With AVX-512 each sweep over the block runs two consecutive sections (half the memory
+//! traffic); sections with numerator `[1, 2, 1]` (all low-pass Butterworth sections but the
+//! first) replace their multiplications by 1 and 2 with additions. Blocks are distributed over
+//! threads with rayon; the channels of one trial of a `(frames, channels)` corpus are gathered
+//! and scattered together as short contiguous runs.
 //!
 //! The arithmetic per lane is scipy's `sosfilt` (direct form II transposed); the SIMD builds use
-//! fused multiply-adds, which changes results only in the last bits. The instruction set is
-//! chosen at run time (AVX-512F, AVX2+FMA, or portable code), not at build time.
+//! fused multiply-adds, which changes results only in the last bits (the portable build is
+//! bit-identical to scipy's recursion). The instruction set is chosen at run time (AVX-512F,
+//! AVX2+FMA, or portable code), not at build time.
 
 use rayon::prelude::*;
 
 /// Signals per block for the remainder of a group (at most this many signals left), and the
 /// block width of the portable build.
 const SMALL_LANES: usize = 8;
-/// Whether sweeps fuse two sections (see [`run_block`]).
-const FUSED: bool = true;
 
 /// One second-order section with its `sosfilt_zi` initial state (per unit input).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -402,7 +405,7 @@ unsafe fn scatter_lanes<const W: usize>(body: &[[f64; W]], job: &Job) {
 ///
 /// SAFETY (caller): no other thread writes the block's signals.
 #[inline(always)]
-unsafe fn block_job<const W: usize, const FMA: bool>(
+unsafe fn block_job<const W: usize, const FMA: bool, const FUSE: bool>(
     sections: &[Section],
     job: &Job,
     buf: &mut Vec<[f64; W]>,
@@ -444,7 +447,7 @@ unsafe fn block_job<const W: usize, const FMA: bool>(
             buf[edge + len + i][l] = 2.0 * last[l] - mirror[l];
         }
     }
-    filtfilt_block::<W, FMA, FUSED>(sections, buf);
+    filtfilt_block::<W, FMA, FUSE>(sections, buf);
     let body = &buf[edge..edge + len];
     // SAFETY: exclusive by this function's contract.
     unsafe {
@@ -462,21 +465,21 @@ unsafe fn block_job<const W: usize, const FMA: bool>(
 
 unsafe fn job_portable<const W: usize>(s: &[Section], job: &Job, buf: &mut Vec<[f64; W]>) -> bool {
     // SAFETY: forwarded contract.
-    unsafe { block_job::<W, false>(s, job, buf) }
+    unsafe { block_job::<W, false, true>(s, job, buf) }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn job_avx2<const W: usize>(s: &[Section], job: &Job, buf: &mut Vec<[f64; W]>) -> bool {
     // SAFETY: forwarded contract.
-    unsafe { block_job::<W, true>(s, job, buf) }
+    unsafe { block_job::<W, true, false>(s, job, buf) }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
 unsafe fn job_avx512<const W: usize>(s: &[Section], job: &Job, buf: &mut Vec<[f64; W]>) -> bool {
     // SAFETY: forwarded contract.
-    unsafe { block_job::<W, true>(s, job, buf) }
+    unsafe { block_job::<W, true, true>(s, job, buf) }
 }
 
 /// SAFETY (caller): `level` is available and no other thread writes the block's signals.
@@ -535,8 +538,9 @@ pub fn filtfilt_groups_at(
 }
 
 /// Block width of the widest kernel at each level: enough independent lanes to keep the FMA
-/// units busy without spilling the lane states out of the vector registers (measured with
-/// `cargo bench --bench signal -- block`).
+/// units busy without spilling the lane states out of the vector registers. With AVX-512 the
+/// sweeps fuse two sections (32 registers hold both states); with AVX2 and portable code, one
+/// (measured with `cargo bench --bench signal -- block`).
 pub fn lanes_at(level: Level) -> usize {
     match level {
         #[cfg(target_arch = "x86_64")]

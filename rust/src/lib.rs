@@ -7,10 +7,13 @@ pub mod error;
 
 pub mod buffer;
 pub mod checks;
+pub mod clock;
 pub mod filter;
+pub mod gradient;
 pub mod lanes;
 pub mod ragged;
 pub mod resample;
+pub mod seg1;
 pub mod zvc;
 
 pub mod covariance;

@@ -1,14 +1,15 @@
 //! Lloyd iterations with exact pruning (the engine behind [`crate::kmeans`]).
 //!
-//! Each row keeps an upper bound `u` on the distance to its centre and a lower bound `l` on
-//! the distance to every other centre, both *anchored* at the iteration `t` where they were
-//! last computed: at iteration `now` they are loosened by the net displacement of the centres
-//! since `t` (`‖c(now) - c(t)‖`, Newling & Fleuret's "ns" bounds), not by the sum of every
-//! step's displacement. A row is left alone when `u < max(l, s_a)` (`s_a`: half the distance
-//! from its centre to the nearest other centre, Hamerly's test); otherwise `u` is recomputed
-//! and, if the test still fails, the row is compared with the centres lying within `2u` of
-//! its own centre (the others are provably farther), in batches of rows that share a centre
-//! so the SIMD distance kernel runs on full tiles. Every pruning decision keeps a safety margin
+//! Each row keeps an upper bound `u` on the distance to its centre and lower bounds on the
+//! distance to the other centres, *anchored* at the iteration `t` where they were last
+//! computed: at iteration `now` they are loosened by the net displacement of the centres since
+//! `t` (`‖c(now) - c(t)‖`, Newling & Fleuret's "ns" bounds), not by the sum of every step's
+//! displacement. A row is left alone when `u < max(l, s_a)` (`s_a`: half the distance from its
+//! centre to the nearest other centre, Hamerly's test). With few centres (`k ≤ 32`) each row
+//! also keeps one lower bound per centre (Elkan's bounds, f32 rounded down) and a row that
+//! fails is compared with every centre at once; with more centres a failing row gets its `u`
+//! recomputed and, if still needed, is compared only with the centres lying within `2u` of its
+//! own centre (the others are provably farther). Every pruning decision keeps a safety margin
 //! of `1e-11 ×` the data diameter, so the labels equal those of brute-force Lloyd except for
 //! rows whose two nearest centres are tied within that margin.
 //!
@@ -20,7 +21,6 @@ use rayon::prelude::*;
 
 use crate::sqdist::{sq_dist, sq_dists, two_nearest, Panel};
 
-pub static DBG: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 /// Rows per parallel task of the bound tests.
 const CHUNK: usize = 2048;
 /// Rows per distance-kernel call.
@@ -66,19 +66,8 @@ pub(crate) fn lloyd(
     let mut n_iter = 0;
     for it in 0..max_iter {
         n_iter = it + 1;
-        let t0 = std::time::Instant::now();
         let changes = st.e_step();
-        let t1 = t0.elapsed();
         let shift = st.m_step(&changes);
-        if std::env::var("KDBG").is_ok() {
-            eprintln!(
-                "it {it} changes {} scans {} e {:?} m {:?}",
-                changes.len(),
-                DBG.swap(0, std::sync::atomic::Ordering::Relaxed),
-                t1,
-                t0.elapsed() - t1
-            );
-        }
         if it > 0 && changes.is_empty() {
             strict = true;
             break;
@@ -348,7 +337,6 @@ impl<'a> State<'a> {
                     }
                 }
                 let mut changes = Vec::new();
-                DBG.fetch_add(scan.len(), std::sync::atomic::Ordering::Relaxed);
                 if direct && !scan.is_empty() {
                     let kp = panel.kpad();
                     let mut buf = vec![0.0; GROUP.min(scan.len()) * kp];
@@ -663,13 +651,15 @@ fn store_bounds(dst: &mut [f32], sq: &[f64]) {
     }
 }
 
-/// `min_{j ≠ skip} (bounds[j] - disp[j])` over the `bounds.len()` values (a multiple of 8;
-/// `disp` empty means zero displacement, else as long as `bounds`).
+/// `min_{j ≠ skip} (bounds[j] - disp[j])` (`disp` empty means zero displacement, else as
+/// long as `bounds`).
 #[inline]
 fn min_except(bounds: &[f32], skip: usize, disp: &[f64]) -> f64 {
     assert!(disp.is_empty() || disp.len() == bounds.len());
     #[cfg(target_arch = "x86_64")]
-    if crate::sqdist::detected_level() == crate::sqdist::Level::Avx512 && bounds.len() % 8 == 0 {
+    if crate::sqdist::detected_level() == crate::sqdist::Level::Avx512
+        && bounds.len().is_multiple_of(8)
+    {
         // SAFETY: AVX-512F detected; lengths checked above.
         return unsafe { min_except512(bounds, skip, disp) };
     }
@@ -683,6 +673,10 @@ fn min_except(bounds: &[f32], skip: usize, disp: &[f64]) -> f64 {
     m
 }
 
+/// [`min_except`] with AVX-512 (8 bounds per step).
+///
+/// # Safety
+/// AVX-512F available; `bounds.len()` a multiple of 8; `disp` empty or as long as `bounds`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 unsafe fn min_except512(bounds: &[f32], skip: usize, disp: &[f64]) -> f64 {

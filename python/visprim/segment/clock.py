@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from visprim import kernels
+
 __all__ = ["frames_to_times", "times_to_frames"]
 
 
@@ -34,17 +36,6 @@ def times_to_frames(
     t: NDArray[np.float64],
 ) -> NDArray[np.float64]:
     """Fractional frame indices (relative to each trial's first frame) of times in seconds,
-    by linear interpolation; clipped to the trial's first and last frame."""
-    n = times.shape[0]
-    last = _last_frames(n, offsets)
-    lengths = last - offsets + 1
-    trial_of = np.repeat(np.arange(offsets.size), lengths)
-    local = times - times[offsets][trial_of]
-    span = float(local.max()) + 1.0
-    key = local + trial_of * span  # increasing over the whole corpus
-    q = np.asarray(t, dtype=np.float64) - times[offsets][trial]
-    q = np.clip(q, 0.0, local[last][trial]) + trial * span
-    i = np.searchsorted(key, q, side="right") - 1
-    i = np.clip(i, offsets[trial], last[trial] - 1)
-    frac = (q - key[i]) / (key[i + 1] - key[i])
-    return (i - offsets[trial]) + np.clip(frac, 0.0, 1.0)
+    by linear interpolation; clipped to the trial's first and last frame (Rust kernel
+    :func:`visprim.kernels.times_to_frames`)."""
+    return kernels.times_to_frames(times, offsets, trial, np.asarray(t, dtype=np.float64))

@@ -1,6 +1,7 @@
 """SEG-1: segmentation at zero-velocity crossings shared by several DOFs.
 
-Algorithm (per trial, vectorised over a corpus):
+Algorithm (per trial, a whole corpus per call; the grouping of step 2 runs in the Rust kernel
+:func:`visprim.kernels.seg1_events`):
 
 1. Find the significant ZVCs of every DOF (:mod:`visprim.segment.zvc`).
 2. Merge the ZVCs of all DOFs, in time order, into *events*: a ZVC closer than ``window``
@@ -25,6 +26,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from visprim import kernels
 from visprim.segment.zvc import DEFAULT_MIN_CHANGE_DEG, CorpusCrossings, zvc_concatenated
 
 __all__ = ["DEFAULT_WINDOW", "Seg1Events", "seg1", "seg1_events", "seg1_from_crossings"]
@@ -50,24 +52,14 @@ def seg1_events(
         raise ValueError(f"window must be a positive number of seconds, got {window!r}")
     if int(min_dofs) < 1:
         raise ValueError(f"min_dofs must be >= 1, got {min_dofs!r}")
-    order = np.lexsort((crossings.time, crossings.trial))
-    trial = crossings.trial[order]
-    time = crossings.time[order]
-    dof = crossings.dof[order]
-    if trial.size == 0:
-        empty_i = np.zeros(0, dtype=np.int64)
-        return Seg1Events(empty_i, np.zeros(0), empty_i, np.zeros(0, dtype=bool))
-    new = np.ones(trial.size, dtype=bool)
-    new[1:] = (trial[1:] != trial[:-1]) | (np.diff(time) >= window)
-    event = np.cumsum(new) - 1
-    m = int(event[-1]) + 1
-    counts = np.bincount(event, minlength=m)
-    first = np.flatnonzero(new)  # ZVCs of an event are contiguous and in time order
-    median_time = 0.5 * (time[first + (counts - 1) // 2] + time[first + counts // 2])
-    n_dof = int(dof.max()) + 1
-    pairs = np.unique(event * n_dof + dof)
-    n_dofs = np.bincount(pairs // n_dof, minlength=m).astype(np.int64)
-    return Seg1Events(trial[new], median_time, n_dofs, n_dofs >= int(min_dofs))
+    trial = np.asarray(crossings.trial, dtype=np.int64)
+    dof = np.asarray(crossings.dof, dtype=np.int64)
+    time = np.asarray(crossings.time, dtype=np.float64)
+    if trial.size > 1 and np.any(trial[1:] < trial[:-1]):
+        order = np.argsort(trial, kind="stable")  # the kernel wants crossings grouped by trial
+        trial, dof, time = trial[order], dof[order], time[order]
+    ev_trial, ev_time, n_dofs = kernels.seg1_events(trial, dof, time, float(window))
+    return Seg1Events(ev_trial, ev_time, n_dofs, n_dofs >= int(min_dofs))
 
 
 def seg1_from_crossings(

@@ -1,9 +1,12 @@
-"""Angular velocities from the real (possibly jittered) timestamps."""
+"""Angular velocities from the real (possibly jittered) timestamps (``numpy.gradient``
+semantics; the corpus form runs in the Rust kernel :func:`visprim.kernels.gradient_ragged`)."""
 
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from visprim import kernels
 
 __all__ = ["angular_velocity", "velocity_concatenated"]
 
@@ -33,7 +36,8 @@ def angular_velocity(times: ArrayLike, angles: ArrayLike) -> NDArray[np.float64]
 def velocity_concatenated(
     times: ArrayLike, values: ArrayLike, offsets: ArrayLike
 ) -> NDArray[np.float64]:
-    """:func:`angular_velocity` of every trial of a concatenated corpus in one numpy pass.
+    """:func:`angular_velocity` of every trial of a concatenated corpus in one call of the
+    Rust kernel :func:`visprim.kernels.gradient_ragged`.
 
     Parameters
     ----------
@@ -44,38 +48,20 @@ def velocity_concatenated(
 
     Returns
     -------
-    (N, C) float64: identical (to rounding) to ``np.gradient(values_i, times_i, axis=0)`` per
-    trial.
+    (N, C) float64 (units of ``values`` per second): identical to
+    ``np.gradient(values_i, times_i, axis=0)`` per trial.
     """
     t = np.ascontiguousarray(times, dtype=np.float64)
     x = np.ascontiguousarray(values, dtype=np.float64)
     off = np.asarray(offsets, dtype=np.int64)
     if x.ndim != 2:
         raise ValueError(f"values must have shape (N, channels), got {x.shape}")
-    _check_times(t, x.shape[0], "velocity_concatenated")
-    n = x.shape[0]
-    ends = np.append(off[1:], n) - 1  # last frame of each trial
-    if np.any(ends - off < 1):
-        k = int(np.argmax(ends - off < 1))
-        raise ValueError(f"velocity_concatenated: trial {k} has fewer than 2 frames")
-    h = np.diff(t)  # h[i] = t[i+1] - t[i]; across trial joins it is meaningless but unused
-    inner_ok = np.ones(n - 1, dtype=bool)
-    inner_ok[ends[:-1]] = False  # the step from a trial's last frame to the next trial
-    if np.any(h[inner_ok] <= 0):
-        raise ValueError("velocity_concatenated: times must be strictly increasing in a trial")
-    v = np.empty_like(x)
-    if n > 2:
-        # np.gradient's second-order weights for uneven steps (the steps that straddle a join
-        # of two trials give garbage rows, overwritten by the one-sided ends below).
-        h0 = h[:-1]  # t[i] - t[i-1]
-        h1 = h[1:]  # t[i+1] - t[i]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            w_prev = (-h1 / (h0 * (h0 + h1)))[:, None]
-            w_here = ((h1 - h0) / (h0 * h1))[:, None]
-            w_next = (h0 / (h1 * (h0 + h1)))[:, None]
-        np.multiply(w_prev, x[:-2], out=v[1:-1])
-        v[1:-1] += w_here * x[1:-1]
-        v[1:-1] += w_next * x[2:]
-    v[off] = (x[off + 1] - x[off]) / h[off, None]
-    v[ends] = (x[ends] - x[ends - 1]) / h[ends - 1, None]
-    return v
+    if t.shape != (x.shape[0],):
+        raise ValueError(
+            f"velocity_concatenated: times must have shape ({x.shape[0]},) to match values, "
+            f"got {t.shape}"
+        )
+    try:  # the kernel checks the offsets, trial lengths and timestamps (finite, increasing)
+        return kernels.gradient_ragged(t, x, off)
+    except ValueError as err:
+        raise ValueError(f"velocity_concatenated: {err}") from None

@@ -1,4 +1,5 @@
-//! Bindings of the signal kernels (filter, zero-velocity crossings, resampling).
+//! Bindings of the signal kernels (filter, velocity, zero-velocity crossings, SEG-1 events,
+//! time to frame conversion, resampling).
 //!
 //! Each function only converts and checks its Python arguments (ndarray type, dtype, ndim; a
 //! copy when an array is not C-contiguous), runs the pure kernel with the GIL released, and
@@ -16,7 +17,7 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 
 use crate::filter::{self, Sos};
-use crate::{resample, zvc};
+use crate::{clock, gradient, resample, seg1, zvc};
 
 /// A read-only float64 array argument, with its name for messages.
 struct F64Arg<'py> {
@@ -103,6 +104,25 @@ fn offsets_arg(obj: &Bound<'_, PyAny>) -> PyResult<Vec<i64>> {
     if arr.ndim() != 1 {
         return Err(PyValueError::new_err(format!(
             "offsets must be 1-D (the first frame of each trial), got shape {}",
+            shape_str(arr.shape())
+        )));
+    }
+    let arr = arr.cast::<PyArrayDyn<i64>>()?.readonly();
+    Ok(arr.as_array().iter().copied().collect())
+}
+
+/// A 1-D int64 array argument, copied to a vector.
+fn i64_vec(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i64>> {
+    let arr = as_ndarray(obj, name, "int64")?;
+    if !arr.dtype().is_equiv_to(&numpy::dtype::<i64>(obj.py())) {
+        return Err(PyTypeError::new_err(format!(
+            "{name} must have dtype int64, got {}; convert it with .astype(numpy.int64)",
+            arr.dtype()
+        )));
+    }
+    if arr.ndim() != 1 {
+        return Err(PyValueError::new_err(format!(
+            "{name} must be 1-D, got shape {}",
             shape_str(arr.shape())
         )));
     }
@@ -308,6 +328,87 @@ fn zero_velocity_crossings_ragged<'py>(
     ))
 }
 
+/// Time derivative of every trial of a ragged corpus `values` `(total_frames, channels)` (1-D:
+/// one channel) on its timestamps `times` `(total_frames,)`: `numpy.gradient` per trial.
+#[pyfunction]
+fn gradient_ragged<'py>(
+    py: Python<'py>,
+    times: &Bound<'py, PyAny>,
+    values: &Bound<'py, PyAny>,
+    offsets: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let t = f64_arg(times, "times", &[1])?;
+    let v = f64_arg(values, "values", &[1, 2])?;
+    let offsets = offsets_arg(offsets)?;
+    let (frames, channels) = frames_channels(&v.shape);
+    if t.shape[0] != frames {
+        return Err(PyValueError::new_err(format!(
+            "times must have shape ({frames},) to match values {}, got {}",
+            shape_str(&v.shape),
+            shape_str(&t.shape)
+        )));
+    }
+    let tv = t.values();
+    let tv: &[f64] = &tv;
+    let data = v.values();
+    let data: &[f64] = &data;
+    let out = py.detach(|| gradient::gradient_ragged(tv, data, channels, &offsets))?;
+    Ok(ArrayD::from_shape_vec(IxDyn(&v.shape), out)
+        .expect("shape of the input")
+        .into_pyarray(py))
+}
+
+type Events<'py> = (
+    Bound<'py, PyArray1<i64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<i64>>,
+);
+
+/// SEG-1 events of crossings `(trial, channel, time)` (trial non-decreasing): `(trial, median
+/// time, distinct channels)` per event, sorted by trial then time.
+#[pyfunction]
+fn seg1_events<'py>(
+    py: Python<'py>,
+    trial: &Bound<'py, PyAny>,
+    channel: &Bound<'py, PyAny>,
+    time: &Bound<'py, PyAny>,
+    window: f64,
+) -> PyResult<Events<'py>> {
+    let trial = i64_vec(trial, "trial")?;
+    let channel = i64_vec(channel, "channel")?;
+    let t = f64_arg(time, "time", &[1])?;
+    let tv = t.values();
+    let tv: &[f64] = &tv;
+    let ev = py.detach(|| seg1::seg1_events(&trial, &channel, tv, window))?;
+    Ok((
+        ev.trial.into_pyarray(py),
+        ev.time.into_pyarray(py),
+        ev.n_channels.into_pyarray(py),
+    ))
+}
+
+/// Fractional frames (relative to each trial's first frame) of times `t` (seconds) of trials
+/// `trial`, by linear interpolation of the ragged corpus's `times`, clamped to the trial.
+#[pyfunction]
+fn times_to_frames<'py>(
+    py: Python<'py>,
+    times: &Bound<'py, PyAny>,
+    offsets: &Bound<'py, PyAny>,
+    trial: &Bound<'py, PyAny>,
+    t: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let times = f64_arg(times, "times", &[1])?;
+    let offsets = offsets_arg(offsets)?;
+    let trial = i64_vec(trial, "trial")?;
+    let q = f64_arg(t, "t", &[1])?;
+    let tv = times.values();
+    let tv: &[f64] = &tv;
+    let qv = q.values();
+    let qv: &[f64] = &qv;
+    let out = py.detach(|| clock::times_to_frames(tv, &offsets, &trial, qv))?;
+    Ok(out.into_pyarray(py))
+}
+
 /// Each segment `[starts[i], ends[i]]` (fractional frames) of `values` `(frames, channels)`
 /// linearly resampled to `n` points per channel: `(n_segments, channels * n)`, channel-major.
 #[pyfunction]
@@ -345,8 +446,11 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(default_padlen, m)?)?;
     m.add_function(wrap_pyfunction!(sosfiltfilt, m)?)?;
     m.add_function(wrap_pyfunction!(sosfiltfilt_ragged, m)?)?;
+    m.add_function(wrap_pyfunction!(gradient_ragged, m)?)?;
     m.add_function(wrap_pyfunction!(zero_velocity_crossings, m)?)?;
     m.add_function(wrap_pyfunction!(zero_velocity_crossings_ragged, m)?)?;
+    m.add_function(wrap_pyfunction!(seg1_events, m)?)?;
+    m.add_function(wrap_pyfunction!(times_to_frames, m)?)?;
     m.add_function(wrap_pyfunction!(resample_segments, m)?)?;
     Ok(())
 }
