@@ -29,10 +29,13 @@ def blas_info() -> str:
     except ImportError:
         return "unknown (threadpoolctl not installed)"
     infos = [i for i in threadpool_info() if i.get("user_api") == "blas"]
-    return "; ".join(
-        f"{i.get('internal_api')} {i.get('architecture')}, {i.get('num_threads')} threads"
-        for i in infos
-    ) or "none found"
+    return (
+        "; ".join(
+            f"{i.get('internal_api')} {i.get('architecture')}, {i.get('num_threads')} threads"
+            for i in infos
+        )
+        or "none found"
+    )
 
 
 @dataclass

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from visprim.trial import MARKER_NAMES, JOINT_NAMES, Trial, Truth
+from visprim.trial import JOINT_NAMES, MARKER_NAMES, Trial, Truth
 
 __version__ = "0.1.0"
 

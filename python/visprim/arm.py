@@ -57,7 +57,8 @@ def rot_z(angle: ArrayLike) -> NDArray[np.float64]:
     a = np.asarray(angle, dtype=np.float64)
     c, s = np.cos(a), np.sin(a)
     o, z = np.ones_like(a), np.zeros_like(a)
-    return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], -2)
+    rows = [np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)]
+    return np.stack(rows, -2)
 
 
 def rot_y(angle: ArrayLike) -> NDArray[np.float64]:
@@ -65,7 +66,8 @@ def rot_y(angle: ArrayLike) -> NDArray[np.float64]:
     a = np.asarray(angle, dtype=np.float64)
     c, s = np.cos(a), np.sin(a)
     o, z = np.ones_like(a), np.zeros_like(a)
-    return np.stack([np.stack([c, z, s], -1), np.stack([z, o, z], -1), np.stack([-s, z, c], -1)], -2)
+    rows = [np.stack([c, z, s], -1), np.stack([z, o, z], -1), np.stack([-s, z, c], -1)]
+    return np.stack(rows, -2)
 
 
 def shoulder_rotation(angles: ArrayLike) -> NDArray[np.float64]:
@@ -81,9 +83,7 @@ def shoulder_rotation_body(angles: ArrayLike) -> NDArray[np.float64]:
     return m @ shoulder_rotation(angles) @ m
 
 
-def forward_kinematics(
-    angles: ArrayLike, lengths: ArmLengths | None = None
-) -> NDArray[np.float64]:
+def forward_kinematics(angles: ArrayLike, lengths: ArmLengths | None = None) -> NDArray[np.float64]:
     """Joint centres of the arm from its 4 angles.
 
     Parameters
@@ -113,4 +113,3 @@ def forward_kinematics(
     hand = wrist + lengths.hand_marker * fore
     points_s = np.stack([shoulder, elbow, wrist, hand], axis=-2)
     return points_s @ BODY_TO_SHOULDER.T
-
