@@ -150,8 +150,10 @@ from visprim import kernels as K
 x, _ = make_blobs(n_samples=30000, n_features=12, centers=40, random_state=5)
 r = K.kmeans(x, 50, seed=3, n_init=2)
 m, c = K.covariance(x)
+w = np.random.default_rng(1).standard_normal((6000, 300))  # wide rows: parallel product
+mw, cw = K.covariance(w)
 h = hashlib.sha256()
-for a in (r.centers, r.labels, np.array([r.inertia, r.n_iter]), m, c):
+for a in (r.centers, r.labels, np.array([r.inertia, r.n_iter]), m, c, mw, cw):
     h.update(np.ascontiguousarray(a).tobytes())
 print(h.hexdigest())
 """

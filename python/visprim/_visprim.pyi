@@ -1,5 +1,7 @@
 """Type stubs of the compiled extension visprim._visprim (see visprim.kernels)."""
 
+from typing import final
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -57,8 +59,9 @@ def covariance(
     x: NDArray[np.float64], *, n_threads: int | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
 
+@final
 class CovarianceAccumulator:
-    def __init__(self, dim: int | None = None) -> None: ...
+    def __new__(cls, dim: int | None = None) -> CovarianceAccumulator: ...
     def update(self, x: NDArray[np.float64], *, n_threads: int | None = None) -> None: ...
     def merge(self, other: CovarianceAccumulator) -> None: ...
     @property
@@ -77,6 +80,7 @@ def eigh(
     a: NDArray[np.float64], *, k: int | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]: ...
 
+@final
 class KMeansResult:
     @property
     def centers(self) -> NDArray[np.float64]: ...

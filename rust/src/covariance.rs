@@ -13,9 +13,11 @@
 //! scatter, so data far from the origin (e.g. positions in metres around an offset) keeps its
 //! precision, unlike the textbook `XᵀX - n μμᵀ`.
 //!
-//! Parallelism: the rows are cut into a number of parts that depends only on `n` (never on the
-//! thread count); each part's scatter is computed sequentially and the parts are added in
-//! order, so results are bit-identical for any number of rayon threads.
+//! Parallelism: narrow rows (d < 128) are cut into a number of parts that depends only on `n`
+//! (never on the thread count), each part's scatter is computed sequentially and the parts are
+//! added in order; wide rows go through faer's product parallel over output blocks, whose
+//! per-element summation order does not depend on the split. Results are bit-identical for any
+//! number of rayon threads (tested).
 
 use faer::linalg::matmul::triangular::{matmul, BlockStructure};
 use faer::{Accum, MatMut, MatRef, Par};
@@ -25,6 +27,8 @@ use crate::{Error, Result};
 
 /// Rows per centred sub-block fed to the matrix product (the block stays in L2 for d ≈ 400).
 const SUB_BLOCK_ROWS: usize = 512;
+/// Row width from which the product itself is parallel (instead of splitting the rows).
+const WIDE: usize = 128;
 /// Minimum rows per parallel part, and the maximum number of parts.
 const MIN_PART_ROWS: usize = 2048;
 const MAX_PARTS: usize = 16;
@@ -61,14 +65,21 @@ impl Moments {
         if n == 0 {
             return Ok(Self::new(dim));
         }
-        let parts = n.div_ceil(MIN_PART_ROWS).clamp(1, MAX_PARTS);
+        // Wide rows: one part, faer's matrix product parallel over the output (its split never
+        // changes the summation order). Narrow rows: independent parts in parallel.
+        let wide = dim >= WIDE;
+        let (parts, par) = if wide {
+            (1, Par::rayon(0))
+        } else {
+            (n.div_ceil(MIN_PART_ROWS).clamp(1, MAX_PARTS), Par::Seq)
+        };
         let part_rows = n.div_ceil(parts);
         let partials: Vec<Moments> = (0..parts)
             .into_par_iter()
             .map(|p| {
                 let start = p * part_rows;
                 let end = ((p + 1) * part_rows).min(n);
-                block_moments(&x[start * dim..end * dim], end - start, dim)
+                block_moments(&x[start * dim..end * dim], end - start, dim, par)
             })
             .collect();
         // The parts hold lower triangles only: merge those, mirror once.
@@ -246,7 +257,7 @@ fn symmetrize_from_lower(a: &mut [f64], d: usize) {
 
 /// Sequential statistics of one block of rows (`n ≥ 1`); only the lower triangle of the
 /// scatter matrix is filled.
-fn block_moments(x: &[f64], n: usize, d: usize) -> Moments {
+fn block_moments(x: &[f64], n: usize, d: usize, par: Par) -> Moments {
     // Shift: mean of the first rows, close to the block mean for any reasonable data.
     let ns = n.min(SHIFT_ROWS);
     let mut shift = vec![0.0; d];
@@ -288,7 +299,7 @@ fn block_moments(x: &[f64], n: usize, d: usize) -> Moments {
             yr,
             BlockStructure::Rectangular,
             1.0,
-            Par::Seq,
+            par,
         );
     }
 
@@ -425,16 +436,20 @@ mod tests {
 
     #[test]
     fn thread_count_does_not_change_bits() {
-        let (n, d) = (20_000, 9);
-        let x = values(n * d, 11);
-        let run = |t: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(t)
-                .build()
-                .unwrap();
-            pool.install(|| covariance(&x, n, d).unwrap())
-        };
-        assert_eq!(run(1), run(3));
+        // Narrow rows (parallel parts) and wide rows (parallel product).
+        for &(n, d) in &[(20_000usize, 9usize), (3000, 300)] {
+            let x = values(n * d, 11);
+            let run = |t: usize| {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(t)
+                    .build()
+                    .unwrap();
+                pool.install(|| covariance(&x, n, d).unwrap())
+            };
+            let one = run(1);
+            assert_eq!(one, run(2));
+            assert_eq!(one, run(3));
+        }
     }
 
     #[test]

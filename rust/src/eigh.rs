@@ -52,8 +52,9 @@ pub fn eigh(a: &[f64], d: usize, k: Option<usize>) -> Result<Eigh> {
     // solver (which then fails to converge), and dropping them moves the eigenvalues by at
     // most d·1.5e-154·max|a|, far below rounding.
     let amax = a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    // (The exponent is clamped so that the factor itself stays finite for subnormal input.)
     let scale = if amax > 0.0 {
-        (-amax.log2().round()).exp2()
+        (-amax.log2().round()).clamp(-1020.0, 1020.0).exp2()
     } else {
         1.0
     };

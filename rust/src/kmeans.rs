@@ -15,21 +15,25 @@
 //!   the empty cluster keeps its previous centre;
 //! - ties between equally near centres go to the lowest centre index.
 //!
-//! Speed without changing the result: distances are computed directly (`Σ (x_j - c_j)²`, see
-//! [`crate::sqdist`]), and Hamerly's bounds (an upper bound on the distance to the own centre,
-//! a lower bound on the distance to any other) let most rows skip the distance computations
-//! once centres settle. A row is only skipped when the bounds prove, with a safety margin far
-//! above rounding (about `1e-12 ×` the data diameter), that its nearest centre is unchanged;
-//! the labels are therefore those of plain Lloyd except for rows whose two nearest centres are
-//! tied within that margin.
+//! Seeding ([`crate::kmeanspp`]): scikit-learn's greedy k-means++ (`2 + ⌊ln k⌋` candidates per
+//! step, the one leaving the lowest potential wins), with distances computed in single
+//! precision on rows shifted by the first row and exact triangle-inequality pruning.
 //!
-//! Determinism: rows are processed in fixed chunks (size set by `n`, `k`, `d` only), per-chunk
-//! sums are formed in row order and combined in chunk order, so the result for a given seed is
-//! bit-identical whatever the number of threads.
+//! Speed without changing the result ([`crate::lloyd`]): distances are computed directly
+//! (`Σ (x_j - c_j)²`, see [`crate::sqdist`]), and bounds on the distances (anchored Hamerly
+//! bounds, plus Elkan's per-centre bounds when `k ≤ 32`) let most rows skip the distance
+//! computations once centres settle. A row is only skipped when the bounds prove, with a safety
+//! margin far above rounding (`1e-11 ×` the data diameter), that its nearest centre is
+//! unchanged; the labels are therefore those of plain Lloyd except for rows whose two nearest
+//! centres are tied within that margin.
+//!
+//! Determinism: rows are processed in fixed chunks (size set by `n`, `k`, `d` only), sums are
+//! formed in a fixed order, so the result for a given seed is bit-identical whatever the number
+//! of threads.
 
 use rayon::prelude::*;
 
-use crate::kmeanspp::{default_local_trials, kmeans_plusplus, Rng, MAX_LOCAL_TRIALS};
+use crate::kmeanspp::{default_local_trials, seed, Rng, SeedData, MAX_LOCAL_TRIALS};
 use crate::lloyd::lloyd;
 use crate::sqdist::{sq_dists, two_nearest, Panel};
 use crate::{Error, Result};
@@ -144,9 +148,10 @@ pub fn kmeans(
     }
 
     let mut best: Option<KMeansResult> = None;
+    let seed_data = SeedData::new(x, n, d);
     for r in 0..params.n_init {
         let mut rng = Rng::new(run_seed(params.seed, r as u64));
-        let (centers, _) = kmeans_plusplus(x, n, d, k, trials, &mut rng);
+        let (centers, _) = seed(x, &seed_data, n, k, trials, &mut rng);
         let res = run(x, n, d, &centers, k, params.max_iter, tol_abs, diameter);
         if best.as_ref().is_none_or(|b| res.inertia < b.inertia) {
             best = Some(res);
@@ -577,7 +582,14 @@ mod tests {
                     ..p.clone()
                 };
                 let mut rng = Rng::new(run_seed(q.seed, r));
-                let (c, _) = kmeans_plusplus(&x, n, d, 25, default_local_trials(25), &mut rng);
+                let (c, _) = crate::kmeanspp::kmeans_plusplus(
+                    &x,
+                    n,
+                    d,
+                    25,
+                    default_local_trials(25),
+                    &mut rng,
+                );
                 kmeans(&x, n, d, &q, Some(&c)).unwrap().inertia
             })
             .collect();

@@ -12,7 +12,7 @@
 
 use rayon::prelude::*;
 
-use crate::sqdist::{seed_block, sq_dists, Panel};
+use crate::sqdist::{seed_block32, sq_dists32, Panel32};
 
 /// Rows per parallel task.
 pub(crate) const CHUNK: usize = 1024;
@@ -74,8 +74,11 @@ pub const MAX_LOCAL_TRIALS: usize = 64;
 /// Rows of one cluster of the partition "nearest centre so far".
 #[derive(Clone, Debug, Default)]
 struct Cluster {
-    /// Row indices (in a deterministic order).
+    /// Row indices, ascending.
     members: Vec<u32>,
+    /// `D(x)²` of each member (same order): kept here, not in a global array, so that the
+    /// passes over a cluster read it sequentially.
+    dist: Vec<f64>,
     /// `Σ D(x)²` over the members, summed in member order.
     pot: f64,
     /// `max D(x)²` over the members.
@@ -84,28 +87,57 @@ struct Cluster {
 
 impl Cluster {
     fn from_members(members: Vec<u32>, closest: &[f64]) -> Self {
-        let mut pot = 0.0;
-        let mut radius2 = 0.0f64;
-        for &i in &members {
-            let v = closest[i as usize];
-            pot += v;
-            radius2 = radius2.max(v);
+        let mut c = Self::default();
+        for i in members {
+            c.push(i, closest[i as usize]);
         }
-        Self {
-            members,
-            pot,
-            radius2,
-        }
+        c
+    }
+
+    #[inline]
+    fn push(&mut self, i: u32, v: f64) {
+        self.members.push(i);
+        self.dist.push(v);
+        self.pot += v;
+        self.radius2 = self.radius2.max(v);
+    }
+}
+
+/// The data in single precision for the seeding: rows shifted by the first row (so that
+/// the f32 rounding is relative to the spread of the data, not to its offset).
+pub struct SeedData {
+    d: usize,
+    xf: Vec<f32>,
+}
+
+impl SeedData {
+    /// Single-precision copy of the row-major `n × d` matrix `x` (`n ≥ 1`).
+    pub fn new(x: &[f64], n: usize, d: usize) -> Self {
+        assert!(n >= 1 && x.len() == n * d);
+        let shift = &x[..d];
+        let mut xf = vec![0.0f32; n * d];
+        xf.par_chunks_mut(CHUNK * d)
+            .zip(x.par_chunks(CHUNK * d))
+            .for_each(|(dst, src)| {
+                for (drow, srow) in dst.chunks_exact_mut(d).zip(src.chunks_exact(d)) {
+                    for ((o, &v), &s) in drow.iter_mut().zip(srow).zip(shift) {
+                        *o = (v - s) as f32;
+                    }
+                }
+            });
+        Self { d, xf }
     }
 }
 
 /// Choose `k` seeds among the rows of the row-major `n × d` matrix `x` (`1 ≤ k ≤ n`, finite
 /// values, `1 ≤ n_local_trials ≤ 64`, checked by the caller). Returns the row-major `k × d`
-/// centres and their row indices.
+/// centres (rows of `x`) and their row indices.
 ///
+/// Distances are computed in single precision on rows shifted by the first row (relative
+/// error ~1e-7, enough to draw and compare candidates; half the memory traffic of f64).
 /// Exact pruning (Raff, "Exact acceleration of k-means++", 2021): rows are grouped by their
-/// nearest centre `c`; a candidate `t` cannot bring any row of that group closer when
-/// `‖c - t‖ ≥ 2·max D(x)` over the group (triangle inequality), so such groups are skipped.
+/// nearest centre `c`; a candidate `t` cannot bring a row closer when `‖c - t‖ ≥ 2·D(x)`
+/// (triangle inequality), so such rows, and whole groups, are skipped.
 pub fn kmeans_plusplus(
     x: &[f64],
     n: usize,
@@ -114,17 +146,31 @@ pub fn kmeans_plusplus(
     n_local_trials: usize,
     rng: &mut Rng,
 ) -> (Vec<f64>, Vec<usize>) {
-    assert!(k >= 1 && k <= n && x.len() == n * d);
+    let data = SeedData::new(x, n, d);
+    seed(x, &data, n, k, n_local_trials, rng)
+}
+
+/// [`kmeans_plusplus`] with a prepared single-precision copy.
+pub fn seed(
+    x: &[f64],
+    data: &SeedData,
+    n: usize,
+    k: usize,
+    n_local_trials: usize,
+    rng: &mut Rng,
+) -> (Vec<f64>, Vec<usize>) {
+    let d = data.d;
+    assert!(k >= 1 && k <= n && x.len() == n * d && data.xf.len() == n * d);
     assert!((1..=MAX_LOCAL_TRIALS).contains(&n_local_trials));
     let trials = n_local_trials;
-    let row = |i: usize| &x[i * d..(i + 1) * d];
+    let xf = &data.xf;
+    let row = |i: usize| &xf[i * d..(i + 1) * d];
     let mut indices = Vec::with_capacity(k);
     indices.push(rng.below(n));
-    let mut centers: Vec<f64> = row(indices[0]).to_vec();
 
     // closest[i]: squared distance of row i to its nearest centre so far.
     let mut closest = vec![0.0; n];
-    let first = Panel::from_rows(x, d, &indices);
+    let first = Panel32::from_rows(xf, d, &indices);
     closest
         .par_chunks_mut(CHUNK)
         .enumerate()
@@ -133,33 +179,34 @@ pub fn kmeans_plusplus(
             let mut buf = vec![0.0; GROUP * kp];
             for (g, dg) in dst.chunks_mut(GROUP).enumerate() {
                 let start = b * CHUNK + g * GROUP;
-                let rows: Vec<&[f64]> = (start..start + dg.len()).map(row).collect();
-                sq_dists(&rows, &first, &mut buf);
+                let rows: Vec<&[f32]> = (start..start + dg.len()).map(row).collect();
+                sq_dists32(&rows, &first, &mut buf);
                 for (r, v) in dg.iter_mut().enumerate() {
                     *v = buf[r * kp];
                 }
             }
         });
     let mut clusters = vec![Cluster::from_members((0..n as u32).collect(), &closest)];
+    drop(closest);
 
     let mut candidates = vec![0usize; trials];
     for c in 1..k {
         let pot: f64 = clusters.iter().map(|cl| cl.pot).sum();
         for cand in candidates.iter_mut() {
             *cand = if pot > 0.0 {
-                sample(&clusters, &closest, rng.uniform() * pot)
+                sample(&clusters, rng.uniform() * pot)
             } else {
                 // Every row coincides with a centre: any row is as good as another.
                 rng.below(n)
             };
         }
-        let panel = Panel::from_rows(x, d, &candidates);
+        let panel = Panel32::from_rows(xf, d, &candidates);
         let kp = panel.kpad();
 
         // Which candidates may improve which clusters.
-        let crow: Vec<&[f64]> = centers.chunks_exact(d).collect();
+        let crow: Vec<&[f32]> = indices.iter().map(|&i| row(i)).collect();
         let mut cc = vec![0.0; c * kp];
-        sq_dists(&crow, &panel, &mut cc);
+        sq_dists32(&crow, &panel, &mut cc);
         let masks: Vec<u64> = (0..c)
             .map(|j| {
                 let lim = 4.0 * clusters[j].radius2;
@@ -188,45 +235,55 @@ pub fn kmeans_plusplus(
                 let members = &clusters[j].members[s..e];
                 let ccj = &cc[j * kp..j * kp + trials];
                 let reach = ccj.iter().fold(f64::INFINITY, |m, &v| m.min(v)) / 4.0;
-                let mut pots = vec![0.0; trials];
-                let mut computed: Vec<(u32, usize)> = Vec::new();
-                for (r, &i) in members.iter().enumerate() {
-                    let di = closest[i as usize];
+                // Rows out of reach of every candidate keep D(x)²: one sum serves them all.
+                let mut skipped = 0.0;
+                let mut positions: Vec<u32> = Vec::with_capacity(members.len());
+                let mut near: Vec<f64> = Vec::with_capacity(members.len());
+                let dists = &clusters[j].dist[s..e];
+                for (r, &di) in dists.iter().enumerate() {
                     if di > reach {
-                        computed.push((r as u32, i as usize));
+                        positions.push(r as u32);
+                        near.push(di);
                     } else {
-                        pots.iter_mut().for_each(|p| *p += di);
+                        skipped += di;
                     }
                 }
+                let mut pots = vec![skipped; trials];
                 // Distances to the candidates (kp per row) and, per candidate, the potential
                 // Σ min(D, d_t) over the rows it may bring closer (4·D(x)² > ‖c - t‖²).
-                let mut dist = vec![0.0; computed.len() * kp];
+                let mut dist = vec![0.0; positions.len() * kp];
                 let mut lim = vec![f64::INFINITY; kp];
                 lim[..trials].copy_from_slice(ccj);
+                let mut rows: Vec<&[f32]> = Vec::with_capacity(GROUP);
                 if kp == 8 {
                     let lim8: [f64; 8] = lim[..8].try_into().expect("8 values");
                     let mut acc = [0.0; 8];
-                    let mut near = Vec::with_capacity(GROUP);
-                    for (g, grp) in computed.chunks(GROUP).enumerate() {
-                        let rows: Vec<&[f64]> = grp.iter().map(|&(_, i)| row(i)).collect();
-                        near.clear();
-                        near.extend(grp.iter().map(|&(_, i)| closest[i]));
-                        let start = g * GROUP * 8;
-                        let out = &mut dist[start..start + grp.len() * 8];
-                        seed_block(&rows, &near, &panel, &lim8, out, &mut acc);
+                    for (g, grp) in positions.chunks(GROUP).enumerate() {
+                        rows.clear();
+                        rows.extend(grp.iter().map(|&r| row(members[r as usize] as usize)));
+                        let (start, len) = (g * GROUP, grp.len());
+                        let out = &mut dist[start * 8..(start + len) * 8];
+                        seed_block32(
+                            &rows,
+                            &near[start..start + len],
+                            &panel,
+                            &lim8,
+                            out,
+                            &mut acc,
+                        );
                     }
                     for (p, a) in pots.iter_mut().zip(&acc) {
                         *p += a;
                     }
                 } else {
                     let mut acc = vec![0.0; kp];
-                    for (g, grp) in computed.chunks(GROUP).enumerate() {
-                        let rows: Vec<&[f64]> = grp.iter().map(|&(_, i)| row(i)).collect();
+                    for (g, grp) in positions.chunks(GROUP).enumerate() {
+                        rows.clear();
+                        rows.extend(grp.iter().map(|&r| row(members[r as usize] as usize)));
                         let start = g * GROUP * kp;
-                        sq_dists(&rows, &panel, &mut dist[start..start + grp.len() * kp]);
+                        sq_dists32(&rows, &panel, &mut dist[start..start + grp.len() * kp]);
                     }
-                    for (r, &(_, i)) in computed.iter().enumerate() {
-                        let di = closest[i];
+                    for (r, &di) in near.iter().enumerate() {
                         let drow = &dist[r * kp..(r + 1) * kp];
                         for ((a, &v), &l) in acc.iter_mut().zip(drow).zip(&lim) {
                             let m = if v < di { v } else { di };
@@ -237,7 +294,6 @@ pub fn kmeans_plusplus(
                         *p += a;
                     }
                 }
-                let positions = computed.iter().map(|&(r, _)| r).collect();
                 (positions, dist, pots)
             })
             .collect();
@@ -266,7 +322,6 @@ pub fn kmeans_plusplus(
             }
         }
         indices.push(candidates[best]);
-        centers.extend_from_slice(row(candidates[best]));
 
         // Move the rows that the new centre brings closer.
         let mut first_item = vec![usize::MAX; c];
@@ -283,13 +338,12 @@ pub fn kmeans_plusplus(
                 let mut movers = Vec::new();
                 let mut keep = Cluster::default();
                 let mut it = first_item[j];
-                let members = &clusters[j].members;
+                let (members, dists) = (&clusters[j].members, &clusters[j].dist);
                 while it < items.len() && items[it].0 == j {
                     let (_, s, e) = items[it];
                     let (positions, dist) = (&results[it].0, &results[it].1);
                     let mut next = 0;
-                    for (r, &i) in members[s..e].iter().enumerate() {
-                        let di = closest[i as usize];
+                    for (r, (&i, &di)) in members[s..e].iter().zip(&dists[s..e]).enumerate() {
                         if next < positions.len() && positions[next] as usize == r {
                             let v = dist[next * kp + best];
                             next += 1;
@@ -298,9 +352,7 @@ pub fn kmeans_plusplus(
                                 continue;
                             }
                         }
-                        keep.members.push(i);
-                        keep.pot += di;
-                        keep.radius2 = keep.radius2.max(di);
+                        keep.push(i, di);
                     }
                     it += 1;
                 }
@@ -308,43 +360,43 @@ pub fn kmeans_plusplus(
             })
             .collect();
         // The new cluster: the rows lost by the touched clusters, in cluster then member order.
-        let mut fresh = Cluster::default();
+        let mut gained: Vec<(u32, f64)> = Vec::new();
         for (&j, (keep, movers)) in touched.iter().zip(moved) {
-            for &(i, v) in &movers {
-                closest[i as usize] = v;
-                fresh.members.push(i);
-                fresh.pot += v;
-                fresh.radius2 = fresh.radius2.max(v);
-            }
+            gained.extend_from_slice(&movers);
             if let Some(keep) = keep {
                 clusters[j] = keep;
             }
         }
+        // Ascending row order keeps the later passes over this cluster close to streaming.
+        gained.sort_unstable_by_key(|&(i, _)| i);
+        let mut fresh = Cluster::default();
+        for (i, v) in gained {
+            fresh.push(i, v);
+        }
         clusters.push(fresh);
+    }
+    let mut centers = Vec::with_capacity(k * d);
+    for &i in &indices {
+        centers.extend_from_slice(&x[i * d..(i + 1) * d]);
     }
     (centers, indices)
 }
 
 /// Row where the running sum of `D(x)²`, cluster by cluster and in member order, first
 /// exceeds `r` (`0 ≤ r < Σ D(x)²`).
-fn sample(clusters: &[Cluster], closest: &[f64], r: f64) -> usize {
+fn sample(clusters: &[Cluster], r: f64) -> usize {
     let mut acc = 0.0;
     for cl in clusters {
         if acc + cl.pot > r {
-            for &i in &cl.members {
-                acc += closest[i as usize];
+            for (&i, &v) in cl.members.iter().zip(&cl.dist) {
+                acc += v;
                 if acc > r {
                     return i as usize;
                 }
             }
             // Rounding: fall back to the cluster's last row with a positive weight.
-            if let Some(&i) = cl
-                .members
-                .iter()
-                .rev()
-                .find(|&&i| closest[i as usize] > 0.0)
-            {
-                return i as usize;
+            if let Some(p) = cl.dist.iter().rposition(|&v| v > 0.0) {
+                return cl.members[p] as usize;
             }
         }
         acc += cl.pot;
@@ -353,9 +405,13 @@ fn sample(clusters: &[Cluster], closest: &[f64], r: f64) -> usize {
     clusters
         .iter()
         .rev()
-        .flat_map(|cl| cl.members.iter().rev())
-        .find(|&&i| closest[i as usize] > 0.0)
-        .map_or(0, |&i| i as usize)
+        .find_map(|cl| {
+            cl.dist
+                .iter()
+                .rposition(|&v| v > 0.0)
+                .map(|p| cl.members[p] as usize)
+        })
+        .unwrap_or(0)
 }
 
 #[cfg(test)]
@@ -387,24 +443,26 @@ mod tests {
             Cluster::from_members(vec![0, 1, 3], &w),
             Cluster::from_members(vec![2, 4], &w),
         ];
-        assert_eq!(sample(&clusters, &w, 0.0), 1);
-        assert_eq!(sample(&clusters, &w, 0.999), 1);
-        assert_eq!(sample(&clusters, &w, 1.0), 3);
-        assert_eq!(sample(&clusters, &w, 3.999), 3);
-        assert_eq!(sample(&clusters, &w, 4.0), 4);
-        assert_eq!(sample(&clusters, &w, 5.999), 4);
+        assert_eq!(sample(&clusters, 0.0), 1);
+        assert_eq!(sample(&clusters, 0.999), 1);
+        assert_eq!(sample(&clusters, 1.0), 3);
+        assert_eq!(sample(&clusters, 3.999), 3);
+        assert_eq!(sample(&clusters, 4.0), 4);
+        assert_eq!(sample(&clusters, 5.999), 4);
     }
 
     /// Plain greedy k-means++ (no pruning) with the same random draws.
     fn brute(x: &[f64], n: usize, d: usize, k: usize, trials: usize, seed: u64) -> Vec<usize> {
         let mut rng = Rng::new(seed);
+        // The same single-precision distances as the kernels (rows shifted by the first).
+        let xf: Vec<f32> = (0..n * d).map(|p| (x[p] - x[p % d]) as f32).collect();
         let dist = |i: usize, j: usize| -> f64 {
-            let mut acc = 0.0f64;
+            let mut acc = 0.0f32;
             for t in 0..d {
-                let v = x[i * d + t] - x[j * d + t];
+                let v = xf[i * d + t] - xf[j * d + t];
                 acc = v.mul_add(v, acc);
             }
-            acc
+            acc as f64
         };
         let mut idx = vec![rng.below(n)];
         let mut closest: Vec<f64> = (0..n).map(|i| dist(i, idx[0])).collect();
@@ -418,7 +476,7 @@ mod tests {
             let cands: Vec<usize> = (0..trials)
                 .map(|_| {
                     if pot > 0.0 {
-                        sample(&clusters, &closest, rng.uniform() * pot)
+                        sample(&clusters, rng.uniform() * pot)
                     } else {
                         rng.below(n)
                     }
@@ -431,7 +489,7 @@ mod tests {
             let best = (0..trials).fold(0, |b, t| if pots[t] < pots[b] { t } else { b });
             let t = cands[best];
             idx.push(t);
-            // Rows move to the new cluster in (cluster, member) order.
+            // Rows move to the new cluster, which lists them in ascending order.
             let mut fresh = Vec::new();
             for m in members.iter_mut() {
                 m.retain(|&i| {
@@ -445,6 +503,7 @@ mod tests {
                     }
                 });
             }
+            fresh.sort_unstable();
             members.push(fresh);
         }
         idx

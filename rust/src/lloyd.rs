@@ -33,7 +33,7 @@ const PARTIAL_BYTES: usize = 128 << 20;
 /// (cheap); above, only with the centres near their own (restricted scan).
 const DIRECT_MAX_K: usize = 32;
 /// Largest number of per-centre lower bounds kept (f32, 4 bytes each).
-const ELKAN_MAX_BOUNDS: usize = 64 << 20;
+const ELKAN_MAX_BOUNDS: usize = 32 << 20;
 /// Pruning margin, relative to the data diameter.
 const MARGIN: f64 = 1e-11;
 
@@ -118,6 +118,8 @@ struct State<'a> {
     sums: Vec<f64>,
     comp: Vec<f64>,
     counts: Vec<u64>,
+    /// The first E-step already produced the sums.
+    first_sums_done: bool,
 }
 
 impl<'a> State<'a> {
@@ -156,6 +158,7 @@ impl<'a> State<'a> {
             sums: vec![0.0; k * d],
             comp: vec![0.0; k * d],
             counts: vec![0; k],
+            first_sums_done: false,
         }
     }
 
@@ -176,20 +179,24 @@ impl<'a> State<'a> {
 
     /// First E-step: every row against every centre.
     fn full_scan(&mut self) -> Vec<Change> {
-        let (x, d, k, kl) = (self.x, self.d, self.k, self.kl);
+        let (x, d, k, kl, n) = (self.x, self.d, self.k, self.kl, self.n);
         let panel = &self.panel;
-        self.labels
+        // The first M-step needs the sums of every cluster: gather them per chunk while the
+        // rows are in cache, when the per-chunk partials fit in memory.
+        let fused = n.div_ceil(CHUNK) * k * d * 8 <= PARTIAL_BYTES;
+        let parts: Vec<Option<(Vec<f64>, Vec<u64>)>> = self
+            .labels
             .par_chunks_mut(CHUNK)
             .zip(self.upper.par_chunks_mut(CHUNK))
             .zip(self.lower.par_chunks_mut(CHUNK))
             .zip(self.lowk.par_chunks_mut(CHUNK * kl))
             .enumerate()
-            .for_each(|(b, (((lab, up), lo), lk))| {
+            .map(|(b, (((lab, up), lo), lk))| {
                 let kp = panel.kpad();
+                let base = b * CHUNK;
                 let mut buf = vec![0.0; GROUP * kp];
                 for g in 0..lab.len().div_ceil(GROUP) {
                     let (s, e) = (g * GROUP, ((g + 1) * GROUP).min(lab.len()));
-                    let base = b * CHUNK;
                     let rows: Vec<&[f64]> = (base + s..base + e)
                         .map(|i| &x[i * d..(i + 1) * d])
                         .collect();
@@ -205,11 +212,17 @@ impl<'a> State<'a> {
                         }
                     }
                 }
-            });
+                fused.then(|| partial_sums(x, d, k, base, lab))
+            })
+            .collect();
+        if fused {
+            self.set_sums(parts.iter().flatten());
+        }
+        self.first_sums_done = fused;
         self.t_upper.fill(0);
         self.t_lower.fill(0);
         // Every row gets its first label: report it as a change from "none" (u32::MAX).
-        (0..self.n as u32)
+        (0..n as u32)
             .map(|i| (i, u32::MAX, self.labels[i as usize]))
             .collect()
     }
@@ -311,7 +324,7 @@ impl<'a> State<'a> {
                         tu[i] = now as u32;
                         if u + slack >= m {
                             scan.push(i as u32);
-                            if !direct && u > umax[a] {
+                            if u > umax[a] {
                                 umax[a] = u;
                             }
                             continue;
@@ -488,7 +501,9 @@ impl<'a> State<'a> {
     fn m_step(&mut self, changes: &[Change]) -> f64 {
         let (d, k) = (self.d, self.k);
         if self.now == 1 {
-            self.fresh_sums();
+            if !self.first_sums_done {
+                self.fresh_sums();
+            }
         } else {
             for (c, &(i, old, new)) in changes.iter().enumerate() {
                 if let Some(&(ahead, _, _)) = changes.get(c + 8) {
@@ -553,25 +568,17 @@ impl<'a> State<'a> {
             .labels
             .par_chunks(rows)
             .enumerate()
-            .map(|(b, lab)| {
-                let mut s = vec![0.0; k * d];
-                let mut c = vec![0u64; k];
-                for (i, &l) in lab.iter().enumerate() {
-                    let l = l as usize;
-                    let r = &x[(b * rows + i) * d..(b * rows + i + 1) * d];
-                    s[l * d..(l + 1) * d]
-                        .iter_mut()
-                        .zip(r)
-                        .for_each(|(a, v)| *a += v);
-                    c[l] += 1;
-                }
-                (s, c)
-            })
+            .map(|(b, lab)| partial_sums(x, d, k, b * rows, lab))
             .collect();
+        self.set_sums(parts.iter());
+    }
+
+    /// Totals of per-chunk partial sums, added in chunk order.
+    fn set_sums<'p>(&mut self, parts: impl Iterator<Item = &'p (Vec<f64>, Vec<u64>)>) {
         self.sums.fill(0.0);
         self.comp.fill(0.0);
         self.counts.fill(0);
-        for (s, c) in &parts {
+        for (s, c) in parts {
             self.sums.iter_mut().zip(s).for_each(|(a, v)| *a += v);
             self.counts.iter_mut().zip(c).for_each(|(a, v)| *a += v);
         }
@@ -633,6 +640,28 @@ impl<'a> State<'a> {
             .collect();
         parts.iter().sum()
     }
+}
+
+/// Coordinate sums and counts per cluster of the rows `base..base + labels.len()`.
+fn partial_sums(
+    x: &[f64],
+    d: usize,
+    k: usize,
+    base: usize,
+    labels: &[u32],
+) -> (Vec<f64>, Vec<u64>) {
+    let mut s = vec![0.0; k * d];
+    let mut c = vec![0u64; k];
+    for (i, &l) in labels.iter().enumerate() {
+        let l = l as usize;
+        let r = &x[(base + i) * d..(base + i + 1) * d];
+        s[l * d..(l + 1) * d]
+            .iter_mut()
+            .zip(r)
+            .for_each(|(a, v)| *a += v);
+        c[l] += 1;
+    }
+    (s, c)
 }
 
 /// `x` as an f32 that is never above it (a lower bound stays a lower bound): moving `x` down
@@ -706,4 +735,50 @@ fn two_sum(s: &mut f64, c: &mut f64, y: f64) {
     let bp = t - *s;
     *c += (*s - (t - bp)) + (y - bp);
     *s = t;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_down_never_rounds_up() {
+        let mut x = 1.0e-30f64;
+        while x < 1.0e30 {
+            for v in [x, -x, x * 1.000_000_1, -x * 0.999_999_9] {
+                assert!((round_down(v) as f64) <= v, "{v}");
+                assert!((round_down(v) as f64) >= v - v.abs() * 1e-6);
+            }
+            x *= 1.37;
+        }
+        assert_eq!(round_down(0.0), 0.0);
+    }
+
+    #[test]
+    fn min_except_skips_one_lane() {
+        let bounds: Vec<f32> = (0..16).map(|j| 10.0 + j as f32).collect();
+        let disp: Vec<f64> = (0..16).map(|j| if j == 5 { 9.0 } else { 0.5 }).collect();
+        // Without the skip the minimum is lane 5 (15 - 9 = 6).
+        assert_eq!(min_except(&bounds, 3, &disp), 6.0);
+        assert_eq!(min_except(&bounds, 5, &disp), 9.5);
+        assert_eq!(min_except(&bounds, 0, &[]), 11.0);
+        assert_eq!(min_except(&bounds[..8], 7, &[]), 10.0);
+    }
+
+    #[test]
+    fn two_sum_keeps_what_plain_addition_loses() {
+        let (mut s, mut c) = (1.0e16, 0.0);
+        for _ in 0..1000 {
+            two_sum(&mut s, &mut c, 1.0);
+        }
+        for _ in 0..1000 {
+            two_sum(&mut s, &mut c, -1.0);
+        }
+        assert_eq!(s + c, 1.0e16);
+        let (mut s, mut c) = (1.0e16, 0.0);
+        for _ in 0..1000 {
+            two_sum(&mut s, &mut c, 1.0);
+        }
+        assert_eq!(s + c, 1.0e16 + 1000.0);
+    }
 }

@@ -181,41 +181,6 @@ pub fn sq_dists_at(level: Level, rows: &[&[f64]], panel: &Panel, out: &mut [f64]
     }
 }
 
-/// One k-means++ step on a block of rows against a panel of at most 8 candidates
-/// (`kpad == 8`): `out[r * 8 + t] = ‖rows[r] - t‖²` (as [`sq_dists`]) and, for every
-/// candidate `t`, `pots[t] += min(out[r * 8 + t], closest[r])` when `4·closest[r] > lim[t]`
-/// (the candidate may bring the row closer), else `+= closest[r]`; rows are added in order, so
-/// every instruction set gives the same bits.
-pub fn seed_block(
-    rows: &[&[f64]],
-    closest: &[f64],
-    panel: &Panel,
-    lim: &[f64; 8],
-    out: &mut [f64],
-    pots: &mut [f64; 8],
-) {
-    assert_eq!(
-        panel.kpad, 8,
-        "seed_block needs a panel of at most 8 candidates"
-    );
-    assert!(closest.len() == rows.len() && out.len() >= rows.len() * 8);
-    assert!(rows.iter().all(|r| r.len() >= panel.d));
-    #[cfg(target_arch = "x86_64")]
-    if detected_level() == Level::Avx512 {
-        // SAFETY: AVX-512F detected; rows hold d values; out holds rows.len() × 8.
-        unsafe { x86::seed512(rows, closest, panel.d, panel.data.as_ptr(), lim, out, pots) };
-        return;
-    }
-    sq_dists(rows, panel, out);
-    for (r, &di) in closest.iter().enumerate() {
-        for t in 0..8 {
-            let v = out[r * 8 + t];
-            let m = if v < di { v } else { di };
-            pots[t] += if 4.0 * di > lim[t] { m } else { di };
-        }
-    }
-}
-
 /// `‖a - b‖²` over the first `d` values, any summation order (used for bounds only).
 pub fn sq_dist(a: &[f64], b: &[f64]) -> f64 {
     let d = a.len().min(b.len());
@@ -320,6 +285,16 @@ pub fn prefetch_row(row: &[f64]) {
     }
 }
 
+/// [`prefetch_row`] for a single-precision row.
+#[inline(always)]
+pub fn prefetch_row32(row: &[f32]) {
+    // SAFETY: same memory, viewed as bytes for the hint only.
+    let bytes = unsafe {
+        std::slice::from_raw_parts(row.as_ptr() as *const f64, std::mem::size_of_val(row) / 8)
+    };
+    prefetch_row(bytes);
+}
+
 fn scalar_dists(rows: &[&[f64]], panel: &Panel, out: &mut [f64]) {
     let (d, kpad) = (panel.d, panel.kpad);
     for (r, row) in rows.iter().enumerate() {
@@ -335,9 +310,215 @@ fn scalar_dists(rows: &[&[f64]], panel: &Panel, out: &mut [f64]) {
     }
 }
 
+/// Candidates in single precision for the k-means++ seeding: `data[j * kpad + c]` is
+/// coordinate `j` of candidate `c`, zero-padded to a multiple of 8 columns.
+#[derive(Clone, Debug)]
+pub struct Panel32 {
+    d: usize,
+    k: usize,
+    kpad: usize,
+    data: Vec<f32>,
+}
+
+impl Panel32 {
+    /// Panel of the rows `idx` of the row-major `n × d` f32 matrix `x`.
+    pub fn from_rows(x: &[f32], d: usize, idx: &[usize]) -> Self {
+        let k = idx.len();
+        let kpad = k.div_ceil(PAD).max(1) * PAD;
+        let mut data = vec![0.0; d * kpad];
+        for (c, &i) in idx.iter().enumerate() {
+            for j in 0..d {
+                data[j * kpad + c] = x[i * d + j];
+            }
+        }
+        Self { d, k, kpad, data }
+    }
+
+    /// Number of candidates.
+    pub fn k(&self) -> usize {
+        self.k
+    }
+
+    /// Row length of the outputs (a multiple of 8).
+    pub fn kpad(&self) -> usize {
+        self.kpad
+    }
+}
+
+/// Single-precision [`sq_dists`]: `out[r * kpad + c]` is the squared distance of row `r` to
+/// candidate `c`, accumulated over `j = 0..d` in order with f32 fused multiply-adds and
+/// widened to f64 (same bits with AVX2+FMA or portable code).
+pub fn sq_dists32(rows: &[&[f32]], panel: &Panel32, out: &mut [f64]) {
+    let (d, kpad) = (panel.d, panel.kpad);
+    assert!(out.len() >= rows.len() * kpad);
+    assert!(rows.iter().all(|r| r.len() >= d));
+    #[cfg(target_arch = "x86_64")]
+    if detected_level() != Level::Scalar {
+        for col in (0..kpad).step_by(8) {
+            // SAFETY: AVX2 and FMA detected; rows hold d values; out holds rows × kpad.
+            unsafe { x86::tile32(rows, d, panel.data.as_ptr().add(col), kpad, col, out) };
+        }
+        return;
+    }
+    for (r, row) in rows.iter().enumerate() {
+        for c in 0..kpad {
+            let mut acc = 0.0f32;
+            for j in 0..d {
+                let t = row[j] - panel.data[j * kpad + c];
+                acc = t.mul_add(t, acc);
+            }
+            out[r * kpad + c] = acc as f64;
+        }
+    }
+}
+
+/// One k-means++ step on a block of rows against a panel of at most 8 candidates
+/// (`kpad == 8`): `out[r * 8 + t]` is the squared distance of row `r` to candidate `t` (as
+/// [`sq_dists32`]) and, for every candidate `t`, `pots[t] += min(out[r * 8 + t], closest[r])`
+/// when `4·closest[r] > lim[t]` (the candidate may bring the row closer), else
+/// `+= closest[r]`; rows are added in order in f64, so every instruction set gives the same
+/// bits.
+pub fn seed_block32(
+    rows: &[&[f32]],
+    closest: &[f64],
+    panel: &Panel32,
+    lim: &[f64; 8],
+    out: &mut [f64],
+    pots: &mut [f64; 8],
+) {
+    assert_eq!(
+        panel.kpad, 8,
+        "seed_block32 needs a panel of at most 8 candidates"
+    );
+    assert!(closest.len() == rows.len() && out.len() >= rows.len() * 8);
+    assert!(rows.iter().all(|r| r.len() >= panel.d));
+    #[cfg(target_arch = "x86_64")]
+    if detected_level() != Level::Scalar {
+        // SAFETY: AVX2 and FMA detected; rows hold d values; out holds rows × 8.
+        unsafe { x86::seed32(rows, closest, panel.d, panel.data.as_ptr(), lim, out, pots) };
+        return;
+    }
+    sq_dists32(rows, panel, out);
+    for (r, &di) in closest.iter().enumerate() {
+        for t in 0..8 {
+            let v = out[r * 8 + t];
+            let m = if v < di { v } else { di };
+            pots[t] += if 4.0 * di > lim[t] { m } else { di };
+        }
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use std::arch::x86_64::*;
+
+    /// [`super::seed_block32`]: the [`tile32`] loop with the potential update fused in the
+    /// epilogue (f64, lane-wise in row order like the portable code).
+    ///
+    /// # Safety
+    /// AVX2 and FMA available; rows readable for `d` values; `panel` is `d × 8` f32; `out`
+    /// holds `rows.len() × 8` values.
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn seed32(
+        rows: &[&[f32]],
+        closest: &[f64],
+        d: usize,
+        panel: *const f32,
+        lim: &[f64; 8],
+        out: &mut [f64],
+        pots: &mut [f64; 8],
+    ) {
+        const P: usize = 8;
+        const AHEAD: usize = 4;
+        let n = rows.len();
+        let lim_lo = _mm256_loadu_pd(lim.as_ptr());
+        let lim_hi = _mm256_loadu_pd(lim.as_ptr().add(4));
+        let mut p_lo = _mm256_loadu_pd(pots.as_ptr());
+        let mut p_hi = _mm256_loadu_pd(pots.as_ptr().add(4));
+        let four = _mm256_set1_pd(4.0);
+        for r in rows.iter().take(AHEAD * P) {
+            super::prefetch_row32(r);
+        }
+        let mut b = 0;
+        while b < n {
+            for r in rows.iter().skip(b + AHEAD * P).take(P) {
+                super::prefetch_row32(r);
+            }
+            let valid = (n - b).min(P);
+            let ptrs: [*const f32; P] =
+                std::array::from_fn(|p| rows[b + if p < valid { p } else { 0 }].as_ptr());
+            let mut acc = [_mm256_setzero_ps(); P];
+            for j in 0..d {
+                let c = _mm256_loadu_ps(panel.add(j * 8));
+                for p in 0..P {
+                    let t = _mm256_sub_ps(_mm256_set1_ps(*ptrs[p].add(j)), c);
+                    acc[p] = _mm256_fmadd_ps(t, t, acc[p]);
+                }
+            }
+            for p in 0..valid {
+                let lo = _mm256_cvtps_pd(_mm256_castps256_ps128(acc[p]));
+                let hi = _mm256_cvtps_pd(_mm256_extractf128_ps::<1>(acc[p]));
+                let o = out.as_mut_ptr().add((b + p) * 8);
+                _mm256_storeu_pd(o, lo);
+                _mm256_storeu_pd(o.add(4), hi);
+                let di = _mm256_set1_pd(closest[b + p]);
+                let fd = _mm256_mul_pd(four, di);
+                let u_lo = _mm256_cmp_pd::<_CMP_GT_OQ>(fd, lim_lo);
+                let u_hi = _mm256_cmp_pd::<_CMP_GT_OQ>(fd, lim_hi);
+                p_lo = _mm256_add_pd(p_lo, _mm256_blendv_pd(di, _mm256_min_pd(lo, di), u_lo));
+                p_hi = _mm256_add_pd(p_hi, _mm256_blendv_pd(di, _mm256_min_pd(hi, di), u_hi));
+            }
+            b += P;
+        }
+        _mm256_storeu_pd(pots.as_mut_ptr(), p_lo);
+        _mm256_storeu_pd(pots.as_mut_ptr().add(4), p_hi);
+    }
+
+    /// Single-precision tile: 8 rows × 8 candidates (one ymm), rows in blocks of 8 with
+    /// prefetching; results widened to f64 into `out[r * kpad + col..+8]`.
+    ///
+    /// # Safety
+    /// AVX2 and FMA available; rows readable for `d` values; `panel` points at column `col`
+    /// of a `d × kpad` f32 panel; `out` holds `rows.len() × kpad` values.
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn tile32(
+        rows: &[&[f32]],
+        d: usize,
+        panel: *const f32,
+        kpad: usize,
+        col: usize,
+        out: &mut [f64],
+    ) {
+        const P: usize = 8;
+        const AHEAD: usize = 4;
+        let n = rows.len();
+        for r in rows.iter().take(AHEAD * P) {
+            super::prefetch_row32(r);
+        }
+        let mut b = 0;
+        while b < n {
+            for r in rows.iter().skip(b + AHEAD * P).take(P) {
+                super::prefetch_row32(r);
+            }
+            let valid = (n - b).min(P);
+            let ptrs: [*const f32; P] =
+                std::array::from_fn(|p| rows[b + if p < valid { p } else { 0 }].as_ptr());
+            let mut acc = [_mm256_setzero_ps(); P];
+            for j in 0..d {
+                let c = _mm256_loadu_ps(panel.add(j * kpad));
+                for p in 0..P {
+                    let t = _mm256_sub_ps(_mm256_set1_ps(*ptrs[p].add(j)), c);
+                    acc[p] = _mm256_fmadd_ps(t, t, acc[p]);
+                }
+            }
+            for (p, a) in acc.iter().enumerate().take(valid) {
+                let o = out.as_mut_ptr().add((b + p) * kpad + col);
+                _mm256_storeu_pd(o, _mm256_cvtps_pd(_mm256_castps256_ps128(*a)));
+                _mm256_storeu_pd(o.add(4), _mm256_cvtps_pd(_mm256_extractf128_ps::<1>(*a)));
+            }
+            b += P;
+        }
+    }
 
     /// Register tile: `P` rows × `G` vectors of centres starting at column `col`.
     macro_rules! tile {
@@ -401,59 +582,6 @@ mod x86 {
         _mm256_sub_pd,
         _mm256_fmadd_pd
     );
-
-    /// [`super::seed_block`] with AVX-512: 8 rows × 8 candidates per register tile, the
-    /// potential update fused in the epilogue.
-    ///
-    /// # Safety
-    /// AVX-512F available; every row readable for `d` values; `panel` is `d × 8`; `out` holds
-    /// `rows.len() × 8` values.
-    #[target_feature(enable = "avx512f")]
-    pub(super) unsafe fn seed512(
-        rows: &[&[f64]],
-        closest: &[f64],
-        d: usize,
-        panel: *const f64,
-        lim: &[f64; 8],
-        out: &mut [f64],
-        pots: &mut [f64; 8],
-    ) {
-        const P: usize = 8;
-        const AHEAD: usize = 4;
-        let limv = _mm512_loadu_pd(lim.as_ptr());
-        let four = _mm512_set1_pd(4.0);
-        let mut pacc = _mm512_loadu_pd(pots.as_ptr());
-        for r in rows.iter().take(AHEAD * P) {
-            super::prefetch_row(r);
-        }
-        let n = rows.len();
-        let mut b = 0;
-        while b < n {
-            for r in rows.iter().skip(b + AHEAD * P).take(P) {
-                super::prefetch_row(r);
-            }
-            let valid = (n - b).min(P);
-            let ptrs: [*const f64; P] =
-                std::array::from_fn(|p| rows[b + if p < valid { p } else { 0 }].as_ptr());
-            let mut acc = [_mm512_setzero_pd(); P];
-            for j in 0..d {
-                let c = _mm512_loadu_pd(panel.add(j * 8));
-                for p in 0..P {
-                    let t = _mm512_sub_pd(_mm512_set1_pd(*ptrs[p].add(j)), c);
-                    acc[p] = _mm512_fmadd_pd(t, t, acc[p]);
-                }
-            }
-            for p in 0..valid {
-                let di = _mm512_set1_pd(closest[b + p]);
-                let m = _mm512_min_pd(acc[p], di);
-                let useful = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(_mm512_mul_pd(four, di), limv);
-                pacc = _mm512_add_pd(pacc, _mm512_mask_blend_pd(useful, di, m));
-                _mm512_storeu_pd(out.as_mut_ptr().add((b + p) * 8), acc[p]);
-            }
-            b += P;
-        }
-        _mm512_storeu_pd(pots.as_mut_ptr(), pacc);
-    }
 
     /// Lane-wise best/second/index over full vectors, then a cross-lane merge and a scalar
     /// tail; same result as the sequential scan.
@@ -643,32 +771,53 @@ mod tests {
     }
 
     #[test]
-    fn seed_block_matches_its_definition() {
-        let d = 7;
-        let x = values(37 * d, 5);
-        let cands = values(6 * d, 6);
-        let panel = Panel::from_centers(&cands, 6, d);
-        let rows: Vec<&[f64]> = x.chunks_exact(d).collect();
-        let closest: Vec<f64> = values(37, 7).iter().map(|v| v.abs() * 30.0).collect();
-        let lim = [1.0, 50.0, 0.0, 1e9, 20.0, 3.0, f64::INFINITY, f64::INFINITY];
-        let mut out = vec![0.0; 37 * 8];
-        let mut pots = [1.0; 8];
-        seed_block(&rows, &closest, &panel, &lim, &mut out, &mut pots);
-        let mut want = vec![0.0; 37 * 8];
-        sq_dists_at(Level::Scalar, &rows, &panel, &mut want);
-        let mut want_pots = [1.0; 8];
-        for r in 0..37 {
+    fn single_precision_kernels_match_their_definition() {
+        let (n, d, k) = (29, 11, 13);
+        let x: Vec<f32> = values(n * d, 8).iter().map(|&v| v as f32).collect();
+        let idx: Vec<usize> = (0..k).map(|c| (c * 7) % n).collect();
+        let panel = Panel32::from_rows(&x, d, &idx);
+        let rows: Vec<&[f32]> = x.chunks_exact(d).collect();
+        let kp = panel.kpad();
+        let mut out = vec![f64::NAN; n * kp];
+        sq_dists32(&rows, &panel, &mut out);
+        for r in 0..n {
+            for (c, &i) in idx.iter().enumerate() {
+                let mut acc = 0.0f32;
+                for j in 0..d {
+                    let t = x[r * d + j] - x[i * d + j];
+                    acc = t.mul_add(t, acc);
+                }
+                assert_eq!(out[r * kp + c].to_bits(), (acc as f64).to_bits());
+            }
+        }
+        let p8 = Panel32::from_rows(&x, d, &idx[..5]);
+        let closest: Vec<f64> = values(n, 9).iter().map(|v| v.abs() * 20.0).collect();
+        let lim = [
+            1.0,
+            30.0,
+            0.5,
+            1e9,
+            2.0,
+            f64::INFINITY,
+            f64::INFINITY,
+            f64::INFINITY,
+        ];
+        let mut out8 = vec![0.0; n * 8];
+        let mut pots = [0.5; 8];
+        seed_block32(&rows, &closest, &p8, &lim, &mut out8, &mut pots);
+        let mut want = [0.5; 8];
+        for r in 0..n {
             for t in 0..8 {
-                assert_eq!(out[r * 8 + t].to_bits(), want[r * 8 + t].to_bits());
-                let v = want[r * 8 + t];
-                want_pots[t] += if 4.0 * closest[r] > lim[t] {
-                    v.min(closest[r])
+                let v = out8[r * 8 + t];
+                let m = if v < closest[r] { v } else { closest[r] };
+                want[t] += if 4.0 * closest[r] > lim[t] {
+                    m
                 } else {
                     closest[r]
                 };
             }
         }
-        assert_eq!(pots, want_pots);
+        assert_eq!(pots, want);
     }
 
     #[test]
