@@ -6,7 +6,8 @@ import csv
 
 import numpy as np
 import pytest
-import visprim.sim.cli as sim_cli
+import visprim.cli.simulate as simulate_cli
+import visprim.sim.showcase as sim_cli
 from PIL import Image
 from visprim.cli import main
 from visprim.sim.trajectories import minimum_jerk
@@ -67,7 +68,7 @@ def test_demo_primitives_writes_gifs_and_metrics(tmp_path, capsys) -> None:
 def test_simulate_command_with_stand_in_model(tmp_path, monkeypatch, capsys) -> None:
     model_file = tmp_path / "model.npz"
     model_file.write_bytes(b"stand-in")
-    monkeypatch.setattr(sim_cli, "_load_model", lambda path: FakeModel())
+    monkeypatch.setattr(simulate_cli, "_load_model", lambda path: FakeModel())
     out = tmp_path / "clip.gif"
     assert main(["simulate", str(model_file), "--primitive", "2", "--out", str(out)]) == 0
     with Image.open(out) as im:

@@ -6,7 +6,7 @@
 - :mod:`~visprim.sim.sequencer`: the right arm's 4 angles → joint targets, via points.
 - :mod:`~visprim.sim.playback`: :func:`play` → :class:`Playback` (tracking metrics, frames).
 - :mod:`~visprim.sim.render`: :func:`render_png`, :func:`render_gif` (matplotlib, headless).
-- :mod:`~visprim.sim.cli`: ``visprim simulate`` and :func:`demo_primitives`.
+- :mod:`~visprim.sim.showcase`: primitive trajectories, playbacks and the demo GIFs.
 
 Units: seconds, metres, radians (degrees only in fields named ``_deg``).
 """

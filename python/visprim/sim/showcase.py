@@ -1,10 +1,9 @@
-"""Command-line glue: ``visprim simulate`` and the primitive clips of ``visprim demo``."""
+"""Primitives on the humanoid: trajectories of primitives, their playbacks and the GIFs of
+``visprim demo``."""
 
 from __future__ import annotations
 
-import argparse
 import csv
-import sys
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, Protocol
@@ -121,38 +120,3 @@ def demo_primitives(
         print(f"  primitive {i:2d}: {pb.summary()} -> {path}")
         paths.append(path)
     return paths
-
-
-def _load_model(path: str) -> PrimitiveSource:
-    from visprim import PrimitiveModel
-
-    return PrimitiveModel.load(path)  # type: ignore[no-any-return]
-
-
-def run_simulate(args: argparse.Namespace) -> int:
-    """``visprim simulate MODEL (--primitive K | --movement TRIALFILE) --out GIF``."""
-    if args.primitive is None and args.movement is None:
-        print("visprim simulate: give --primitive K or --movement TRIALFILE", file=sys.stderr)
-        return 2
-    if not Path(args.model).is_file():
-        print(f"visprim simulate: model file {args.model!r} not found", file=sys.stderr)
-        return 2
-    model = _load_model(args.model)
-    try:
-        if args.movement is not None:
-            from visprim.io import read
-
-            trial = read(args.movement)
-            times, angles = model.reconstruct_movement(trial)  # type: ignore[attr-defined]
-            title = f"movement {trial.name}"
-        else:
-            times, angles = primitive_trajectory(model, args.primitive)
-            title = f"primitive {args.primitive}"
-    except (ValueError, OSError) as exc:
-        print(f"visprim simulate: {exc}", file=sys.stderr)
-        return 2
-    playback = play(times, angles)
-    out = render_gif(playback, args.out, title=title)
-    print(f"{title}: {playback.summary()}")
-    print(f"wrote {out} ({playback.frames.shape[0]} frames)")
-    return 0

@@ -1,0 +1,5 @@
+import sys
+
+from visprim.cli.main import main
+
+sys.exit(main())

@@ -1,0 +1,58 @@
+"""``visprim classify``: each segment of new movements -> its nearest primitive."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from visprim.cli import common
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from visprim.classify import classify_trials, score_against_truth
+    from visprim.model import PrimitiveModel
+
+    model = PrimitiveModel.load(args.model)
+    trials, _ = common.trials_and_source(args, common.model_period(model))
+    results = classify_trials(model, trials)
+    lines = []
+    for r in results:
+        hist = r.histogram
+        top = np.argsort(-hist, kind="stable")[: min(5, hist.size)]
+        top_s = ", ".join(f"#{i}x{hist[i]}" for i in top if hist[i] > 0)
+        lines.append(f"{r.name}: sequence {list(r.sequence)}; histogram {top_s or '-'}")
+    print("\n".join(lines))
+    if args.out:
+        out = Path(args.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        with out.open("w", encoding="utf-8") as fh:
+            fh.write("trial,segment,start_s,end_s,primitive,distance_rad\n")
+            for r in results:
+                for j, ((s, e), lab, d) in enumerate(
+                    zip(r.segments, r.labels, r.distances, strict=True)
+                ):
+                    fh.write(f"{r.name},{j},{s:.6f},{e:.6f},{int(lab)},{d:.6g}\n")
+        print(f"segment primitives written to {out}")
+    if all(t.truth is not None for t in trials):
+        print(f"against the true strokes: {score_against_truth(model, trials, results)}")
+    return 0
+
+
+def register(sub: Any) -> None:
+    """Add the command to ``sub`` (from :meth:`argparse.ArgumentParser.add_subparsers`)."""
+    p = sub.add_parser(
+        "classify",
+        help="give each segment of new movements its nearest primitive",
+        description="Segment DATA with the model's settings and print each trial's sequence "
+        "and histogram of primitives (and ARI/purity on generated data).",
+    )
+    p.add_argument("model", metavar="MODEL", help="model file written by `visprim learn`")
+    p.add_argument(
+        "data", nargs="*", metavar="DATA", help="recordings (default: the generated experiment)"
+    )
+    p.add_argument("--out", default=None, help="also write the segment primitives as CSV")
+    common.add_generated_options(p)
+    p.set_defaults(func=run)
