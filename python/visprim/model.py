@@ -28,7 +28,7 @@ from sklearn.base import BaseEstimator
 from sklearn.exceptions import NotFittedError
 
 from visprim import kernels
-from visprim.errors import DEFAULT_F_VALUES, DEFAULT_K_VALUES, ErrorTables, compute_error_tables
+from visprim.accuracy import DEFAULT_F_VALUES, DEFAULT_K_VALUES, ErrorTables, compute_error_tables
 from visprim.pca import PCABasis, fit_pca
 from visprim.preprocess import PreparedCorpus, prepare_corpus, seg2_partition
 from visprim.trial import Trial
@@ -481,7 +481,7 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         f_values: Sequence[int] = DEFAULT_F_VALUES,
         k_values: Sequence[int] = DEFAULT_K_VALUES,
     ) -> ErrorTables:
-        """Tables 1–3 (projection, clustering and total error; see :mod:`visprim.errors`)
+        """Tables 1–3 (projection, clustering and total error; see :mod:`visprim.accuracy`)
         on the training segments.
 
         Needs the training vectors (kept after ``fit``). After :meth:`load` the tables saved

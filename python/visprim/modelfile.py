@@ -212,7 +212,7 @@ def load_model(path: str | PathLike[str]) -> PrimitiveModel:
     ModelFileError
         Another format or format version, or a damaged file.
     """
-    from visprim.errors import ErrorTables
+    from visprim.accuracy import ErrorTables
     from visprim.model import PrimitiveModel
 
     path = Path(path)

@@ -3,7 +3,7 @@
 :func:`write_report` writes into one folder:
 
 * ``tables.md`` and ``table1.md/.csv``, ``table2.md/.csv``, ``table3.md/.csv`` — projection,
-  clustering and total error (:mod:`visprim.errors`);
+  clustering and total error (:mod:`visprim.accuracy`);
 * ``eigenvalues.png`` (spectrum), ``eigenvectors.png`` (paper Fig. 8), ``primitives.png``
   (Fig. 9) — from the model alone;
 * with trials (the model does not store trials; pass them, e.g. read again from the files

@@ -138,7 +138,7 @@ def total_error(
 
 @dataclass(frozen=True)
 class ErrorTable:
-    """One table: a title, column names and rows of numbers (see :mod:`visprim.errors`)."""
+    """One table: a title, column names and rows of numbers (see :mod:`visprim.accuracy`)."""
 
     title: str
     columns: tuple[str, ...]
