@@ -84,7 +84,7 @@ def test_simulate_command_with_stand_in_model(tmp_path, monkeypatch, capsys) -> 
 
 def test_simulate_learned_model_primitives_and_movement(tmp_path, capsys) -> None:
     """End to end on a small generated corpus: learn, save, then play every primitive
-    (issue 6 targets) and render one primitive and one reconstructed movement."""
+    (the simulation targets) and render one primitive and one reconstructed movement."""
     datasets = pytest.importorskip("visprim.datasets")
     from visprim import PrimitiveModel
     from visprim.markers_csv import write_marker_csv

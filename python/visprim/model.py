@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from os import PathLike
-from typing import Any, Literal
+from typing import Any, Literal, TypeGuard
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -255,7 +255,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
 
     def fit(
         self,
-        trials: Sequence[Trial],
+        trials: Sequence[Trial] | ArrayLike,
         y: Any = None,
         *,
         source: dict[str, Any] | None = None,
@@ -625,7 +625,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
             )
         return x
 
-    def _fit_array(self, X: ArrayLike, *, source: dict[str, Any] | None = None) -> PrimitiveModel:
+    def _fit_array(self, X: Any, *, source: dict[str, Any] | None = None) -> PrimitiveModel:
         """``fit`` on vectors (N, d): segment vectors (d = 4 n_samples), or any features, for
         which the PCA and k-means parts work but the angle-curve methods do not."""
         x = self._check_vectors(X, fitting=True)
@@ -713,7 +713,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         return -float(np.mean(np.sum((x - rebuilt) ** 2, axis=1)))
 
 
-def _are_trials(X: Any) -> bool:
+def _are_trials(X: Any) -> TypeGuard[Sequence[Trial] | Trial]:
     """Whether ``fit`` takes ``X`` as trials (else as segment vectors): a Trial, or a
     sequence that is not rows of numbers (other items are reported by :func:`_as_trials`)."""
     if isinstance(X, Trial):

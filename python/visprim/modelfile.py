@@ -11,6 +11,7 @@ A NumPy ``.npz`` (zip) archive, read with ``allow_pickle=False``, with these mem
     n_iter, seg2_threshold in (rad/s)², n_training_segments, trial_names, training_source),
     ``error_tables`` (Tables 1–3 or null) and ``arrays``: for every array member its shape,
     dtype and SHA-256 of its bytes (damage detection).
+
 ``mean`` (d,) radians; ``eigenvalues`` (d,) rad², descending; ``eigenvectors`` (d, d), columns;
 ``cluster_centers`` (k, f) in the projection space; ``labels`` (N,) int64;
 ``segment_trial`` (N,) int64; ``segment_starts`` / ``segment_ends`` (N,) seconds;

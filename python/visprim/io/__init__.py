@@ -149,7 +149,8 @@ def read_pieces(
     skeleton : AMC only: the .asf (default: same stem, else the only .asf in the folder,
         else the .asf whose stem starts the AMC's stem)
     rate : AMC only: frames per second (default 120, CMU; AMC does not store it)
-    mapping : explicit names per role, e.g. ``{"shoulder": "RightArm", "elbow":
+    mapping : dict, optional
+        Explicit names per role, e.g. ``{"shoulder": "RightArm", "elbow":
         "RightForeArm", "wrist": "RightHand"}`` (BVH/ASF) or ``{"acromion": "RSHO",
         "elbow": ["EPL", "EPM"], "wrist": ["WRA", "WRB"], "finger": "FIN"}`` (C3D); roles are
         listed in :mod:`visprim.io.presets`. Overrides the preset's names.

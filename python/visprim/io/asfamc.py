@@ -567,7 +567,7 @@ def read_amc_arm(
         finger_from = f"extrapolated along bone {roles.names['wrist']} (ratio {finger_ratio})"
     body = None
     if roles.has("trunk_low", "trunk_high", "lateral_right", "lateral_left"):
-        chest = rots[:, roles.index["chest"]] if roles.has("chest") else None  # type: ignore[index]
+        chest = rots[:, roles.index["chest"]] if roles.has("chest") else None
         body = torso_frame(
             p("trunk_low"),
             p("trunk_high"),
