@@ -158,14 +158,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     from visprim.cli.logs import configured
 
-    args = build_parser().parse_args(argv)
+    try:
+        args = build_parser().parse_args(argv)
+    except KeyboardInterrupt:
+        print("visprim: interrupted: stopped by Ctrl-C", file=sys.stderr)
+        return EXIT_INTERRUPTED
     command = str(args.command)
     debug = bool(getattr(args, "debug", False))
     with configured(int(args.verbose or 0), bool(getattr(args, "quiet", False))):
         try:
             return int(args.func(args) or 0)
         except KeyboardInterrupt:
-            return _fail(command, "stopped by Ctrl-C; outputs left as before", 130, debug)
+            message = "stopped by Ctrl-C; outputs left as before"
+            return _fail(command, message, EXIT_INTERRUPTED, debug)
         except BrokenPipeError:
             return EXIT_ERROR  # the reader of stdout went away (e.g. `| head`)
         except SystemExit as exc:

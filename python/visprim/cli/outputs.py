@@ -27,6 +27,8 @@ from visprim.cli.common import UsageError
 
 #: File naming the command that wrote an output folder.
 MARKER = ".visprim-output"
+#: Extensions that make a new ``--out`` folder look like a file name (a likely mistake).
+_FILE_SUFFIXES = {".html", ".htm", ".png", ".gif", ".pdf", ".csv", ".md", ".npz", ".txt"}
 _TEMP = re.compile(r"^\.(?P<name>.+)\.visprim-(?:tmp|old)-(?P<pid>\d+)-[0-9a-f]+(?:\..*)?$")
 
 
@@ -83,6 +85,11 @@ def check_folder(
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise UsageError(f"{option} {path} is a file; give a folder (new, or a previous output)")
+    if not p.exists() and p.suffix.lower() in _FILE_SUFFIXES:
+        raise UsageError(
+            f"{option} {path} names a file, but the output is a folder (index.html and the "
+            f"other files go inside); give a folder name such as {p.with_suffix('')}"
+        )
     _check_parent(p, option)
     if p.is_dir() and any(p.iterdir()):
         if not (p / MARKER).is_file() and not (p / "index.html").is_file():
