@@ -68,6 +68,7 @@ CASES = [
     (["simulate", "MODEL", "--out", "x.gif"], 2, "--primitive K or --movement"),
     (["generate", "--out", README], 2, "is a file"),
     (["report", "MODEL", "--out", "report.html"], 2, "give a folder name such as report"),
+    (["report", "MODEL", "--out", "rep", "--trial", "nope"], 1, "--trial nope: no trial"),
     (["report", "MODEL", "--out", str(REPO)], 2, "folder of other files"),
     (["nonsense"], 2, "invalid choice"),
 ]

@@ -32,7 +32,6 @@ from visprim.trial import Trial
 
 log = logging.getLogger(__name__)
 
-_DEFAULT_GENERATED = {"n_subjects": 11, "n_stimuli": 20, "seed": 0}
 #: Frame period (s) recordings are resampled to by default: the original study's 34 ms.
 DEFAULT_RESAMPLE_S = 0.034
 #: Accepted range of ``--resample`` (s): 0.1 ms to 10 s.
@@ -230,7 +229,11 @@ def add_reader_options(p: argparse.ArgumentParser, *, many: bool = True) -> None
     """The options of :func:`visprim.io.read_pieces` that DATA recordings may need
     (``many``: also ``--short`` and ``--strict``, for commands reading several files)."""
     g = p.add_argument_group("reading recordings (DATA; see help(visprim.io))")
-    g.add_argument("--arm", default="right", help="arm to read: right (default) or left")
+    g.add_argument(
+        "--arm",
+        default="right",
+        help="arm to read: right (default) or left (the values visprim.io.read_pieces takes)",
+    )
     g.add_argument(
         "--skeleton", metavar="ASF", default=None, help="AMC files: the .asf skeleton to use"
     )

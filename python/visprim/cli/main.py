@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import re
 import sys
 import traceback
@@ -133,6 +134,9 @@ def describe(exc: BaseException) -> tuple[str, int]:
         )
     if isinstance(exc, OSError):
         return f"{one_line(exc)}; check the paths, free disk space and permissions", EXIT_ERROR
+    if isinstance(exc, ImportError):
+        package = (exc.name or "").split(".")[0] or "the missing package"
+        return f"{one_line(exc)}; install it (pip install {package})", EXIT_ERROR
     if isinstance(exc, ValueError):
         return one_line(exc), EXIT_ERROR
     return (
@@ -140,6 +144,15 @@ def describe(exc: BaseException) -> tuple[str, int]:
         "report it with the output of --debug)",
         EXIT_ERROR,
     )
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null so that the interpreter's final flush does not fail."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # no real file behind stdout (tests)
+        pass
 
 
 def _fail(command: str, message: str, status: int, debug: bool) -> int:
@@ -172,7 +185,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             message = "stopped by Ctrl-C; outputs left as before"
             return _fail(command, message, EXIT_INTERRUPTED, debug)
         except BrokenPipeError:
-            return EXIT_ERROR  # the reader of stdout went away (e.g. `| head`)
+            _silence_stdout()  # the reader of stdout went away (e.g. `| head`)
+            return EXIT_ERROR
         except SystemExit as exc:
             if isinstance(exc.code, int | None):
                 return int(exc.code or 0)

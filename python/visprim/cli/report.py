@@ -61,6 +61,14 @@ def run(args: argparse.Namespace) -> int:
                     "(give DATA for the trial figures)",
                     " ".join(str(exc).split()),
                 )
+        if args.trial is not None:
+            names = [t.name for t in trials or []]
+            if args.trial not in names:
+                shown = ", ".join(names[:5]) + (", ..." if len(names) > 5 else "")
+                raise common.CLIError(
+                    f"--trial {args.trial}: no trial of that name in the data ({shown or 'none'})"
+                    "; give one of them, or leave --trial out"
+                )
         st.step("writing the report")
         rep = write_report_atomic(model, out, trials, trial_name=args.trial)
     for msg in rep.skipped:
