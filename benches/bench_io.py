@@ -60,7 +60,11 @@ def csv_text(n: int) -> str:
 def _cases() -> dict[str, tuple[int, str, Callable[[int], str], Callable[[Path], object]]]:
     from visprim.io.asfamc import parse_asf
     from visprim.io.bvh import parse_bvh
-    from visprim.io.markers_csv import MarkerCSVError, read_marker_csv
+
+    try:
+        from visprim.io.markers_csv import MarkerCSVError, read_marker_csv
+    except ImportError:  # visprim before the marker CSV moved to io/ (for before/after runs)
+        from visprim.markers_csv import MarkerCSVError, read_marker_csv  # type: ignore
 
     def csv(path: Path) -> object:
         try:

@@ -166,8 +166,12 @@ def test_random_byte_flips_of_a_real_file_in_a_child_process(
 
 # --- hypothesis: damaged synthetic files, read in-process ---------------------------------
 
+#: Examples per property (raise it for a longer run: VISPRIM_FUZZ_EXAMPLES=2000).
+EXAMPLES = int(os.environ.get("VISPRIM_FUZZ_EXAMPLES", "150"))
 _FUZZ = settings(
-    max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    max_examples=EXAMPLES,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
 )
 
 

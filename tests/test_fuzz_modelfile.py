@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 from pathlib import Path
 from typing import Any
 
@@ -112,8 +113,12 @@ def _load_or_refuse(path: Path) -> str:
     return "loaded"
 
 
+#: Examples per property (raise it for a longer run: VISPRIM_FUZZ_EXAMPLES=2000).
+EXAMPLES = int(os.environ.get("VISPRIM_FUZZ_EXAMPLES", "200"))
 _FUZZ = settings(
-    max_examples=300, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    max_examples=EXAMPLES,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
 )
 
 
@@ -156,7 +161,9 @@ def test_header_bytes_that_are_not_json(folder: Path, members: dict[str, Any], r
 
 
 @settings(
-    max_examples=50, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    max_examples=max(EXAMPLES // 4, 10),
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture],
 )
 @given(depth=st.integers(100, 200_000), bracket=st.sampled_from(["[", '{"a":']))
 def test_deeply_nested_headers(

@@ -527,7 +527,7 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         from visprim.modelfile import write_model_file
 
         self._check_fitted()
-        arrays = {
+        arrays: dict[str, Any] = {
             "mean": self.mean_,
             "eigenvalues": self.eigenvalues_,
             "eigenvectors": self.eigenvectors_,

@@ -417,7 +417,11 @@ def read_many(
     and ``rate`` for AMC, ``units`` for BVH, ``mapping``, ``preset``, ``up_axis`` and
     ``mirror`` for the motion-capture formats, not the marker CSV) are only passed to files of
     those formats.
-    ``on_error="warn"`` skips unreadable files with a warning instead of raising.
+    ``on_error="warn"`` skips unreadable files (other formats named explicitly included)
+    with a warning instead of raising; every problem of a file is a :class:`ReadError`, so
+    nothing else escapes. Bad arguments (an unknown preset, ``resample=1e-9``) raise
+    ``ValueError`` before any file is read, whatever ``on_error``. Folders and ``**``
+    patterns follow symbolic links to folders once each (link loops are not walked again).
     """
     if on_error not in ("raise", "warn"):
         raise ValueError(f"on_error must be 'raise' or 'warn', got {on_error!r}")

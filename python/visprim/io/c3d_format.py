@@ -82,7 +82,7 @@ class C3DFile:
 def _dec_to_ieee(raw: bytes | NDArray[np.uint8]) -> NDArray[np.float32]:
     """DEC (VAX F-floating) 4-byte floats → IEEE: swap the 16-bit halves, divide by 4."""
     b = np.frombuffer(raw, dtype=np.uint8).reshape(-1, 4)[:, [2, 3, 0, 1]]
-    return np.ascontiguousarray(b).view("<f4").ravel() / np.float32(4.0)
+    return (np.ascontiguousarray(b).view("<f4").ravel() / 4).astype(np.float32)
 
 
 class _Reader:
