@@ -259,3 +259,10 @@ def test_coinciding_markers_are_a_read_error(tmp_path: Path) -> None:
     mapping = {"acromion": "RSHO", "elbow": "RELB", "wrist": "RELB"}
     with pytest.raises(ReadError, match=r"same\.c3d"):
         read(path, mapping=mapping)
+
+
+@pytest.mark.parametrize("rate", [1e-9, 1e9, 0.0, -50.0, float("inf"), float("nan")])
+def test_absurd_rates_are_refused(tmp_path: Path, rate: float) -> None:
+    path = write_arm_c3d(tmp_path / "rate.c3d", rate=rate)
+    with pytest.raises(MalformedFileError, match=r"rate\.c3d: POINT:RATE gives a frame period"):
+        read(path)
