@@ -571,6 +571,10 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
             model.error_tables_ = ErrorTables.from_dict(tables) if tables else None
         except (TypeError, ValueError, LookupError, AttributeError) as exc:
             raise ModelFileError(f"{contents.path}: model parameters not accepted: {exc}") from None
+        if a["mean"].shape[0] != model.dim or a["cluster_centers"].shape[1] != model.n_components:
+            raise ModelFileError(
+                f"{contents.path}: damaged model file: array shapes do not fit the parameters"
+            )
         for name in ("mean", "eigenvalues", "eigenvectors", "cluster_centers", "labels"):
             setattr(model, name + "_", a[name])
         for name in ("segment_trial", "segment_starts", "segment_ends", "primitive_durations"):
