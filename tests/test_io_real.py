@@ -60,7 +60,7 @@ def test_every_recording_loads_with_the_frames_and_rate_of_its_source_table(
             assert np.isfinite(t.markers).all() and np.isfinite(t.joints).all()
             assert t.source == str(path) and t.name == path.stem
             checked += 1
-    assert checked >= 45  # 34 Bandai + 6 AMC + 2 iClone + 3 C3D (+ 17 iClone subject 05)
+    assert checked == 62  # 34 Bandai + 6 AMC + 2 + 17 iClone + 3 C3D (folders with file tables)
 
 
 def _lengths(t: Trial) -> tuple[np.ndarray, np.ndarray]:
