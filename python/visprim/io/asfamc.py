@@ -21,6 +21,7 @@ Conventions (Acclaim format as written by Vicon BodyBuilder for the CMU database
 
 from __future__ import annotations
 
+import math
 import os
 import re
 from collections.abc import Mapping, Sequence
@@ -33,9 +34,12 @@ from numpy.typing import NDArray
 
 from visprim.io.assemble import (
     FINGER_RATIO,
+    MAX_FRAME_PERIOD,
+    MIN_FRAME_PERIOD,
     ArmRecording,
     check_up_axis,
     extend_hand,
+    period_problem,
     torso_frame,
     up_rotation,
 )
@@ -48,6 +52,7 @@ from visprim.io.errors import (
 )
 from visprim.io.rotations import euler_matrix
 from visprim.io.skeleton import resolve_rig
+from visprim.io.text import read_text
 
 _DOFS = ("rx", "ry", "rz", "tx", "ty", "tz", "l")
 DEFAULT_AMC_RATE = 120.0
@@ -106,18 +111,8 @@ class AsfSkeleton:
         return chain[::-1]
 
 
-def _read_text(path: str) -> list[str]:
-    try:
-        text = Path(path).read_text(encoding="utf-8-sig", errors="strict")
-    except UnicodeDecodeError as exc:
-        raise MalformedFileError(
-            path, f"not a text file ({exc.reason} at byte {exc.start})"
-        ) from None
-    except OSError as exc:
-        raise ReadError(path, f"cannot read: {exc.strerror or exc}") from None
-    if not text.strip():
-        raise TruncatedFileError(path, "the file is empty")
-    return text.splitlines()
+def _read_lines(path: str) -> list[str]:
+    return read_text(path)[0].splitlines()
 
 
 def _floats(path: str, line_no: int, tokens: Sequence[str], n: int, what: str) -> list[float]:
@@ -131,7 +126,7 @@ def _floats(path: str, line_no: int, tokens: Sequence[str], n: int, what: str) -
         raise MalformedFileError(
             path, f"line {line_no}: {what} needs {n} numbers, got {' '.join(tokens[:n])!r}"
         ) from None
-    if not all(np.isfinite(vals)):
+    if not all(math.isfinite(v) for v in vals):
         raise MalformedFileError(path, f"line {line_no}: {what} is not finite")
     return vals
 
@@ -146,7 +141,7 @@ def parse_asf(path: str | os.PathLike[str]) -> AsfSkeleton:
         entry naming an undefined bone, a bone without a parent).
     """
     path = os.fspath(path)
-    lines = _read_text(path)
+    lines = _read_lines(path)
     section = None
     name = ""
     length_unit = 1.0
@@ -255,21 +250,23 @@ def parse_asf(path: str | os.PathLike[str]) -> AsfSkeleton:
             dof=tuple(t for t in root_order),
         )
     ]
+    names_seen = {"root"}
     for blk in raw_bones:
         at = blk["line"]
         for attr in ("name", "direction", "length"):
             if attr not in blk:
                 raise MalformedFileError(path, f"line {at}: bone block without {attr!r}")
         d = np.array(blk["direction"], dtype=float)
-        norm = float(np.linalg.norm(d))
+        norm = math.hypot(*blk["direction"])
         length = float(blk["length"])
         bname = str(blk["name"])
         if length < 0:
             raise MalformedFileError(path, f"line {at}: bone {bname} has negative length")
         if norm == 0.0 and length > 0:
             raise MalformedFileError(path, f"line {at}: bone {bname} has a zero direction")
-        if any(x.name == bname for x in bones):
+        if bname in names_seen:
             raise MalformedFileError(path, f"line {at}: bone name {bname!r} is repeated")
+        names_seen.add(bname)
         bones.append(
             AsfBone(
                 name=bname,
@@ -342,7 +339,7 @@ def parse_amc(path: str | os.PathLike[str], skeleton: AsfSkeleton) -> AmcMotion:
         frame missing bones means the file was cut short).
     """
     path = os.fspath(path)
-    lines = _read_text(path)
+    lines = _read_lines(path)
     angle_unit = None
     dof_count = {b.name: len(b.dof) for b in skeleton.bones if b.dof}
     rows: dict[str, list[list[str]]] = {name: [] for name in dof_count}
@@ -542,8 +539,12 @@ def read_amc_arm(
     if motion.n_frames < 2:
         raise ReadError(path, f"a trial needs at least 2 frames, the file has {motion.n_frames}")
     hz = DEFAULT_AMC_RATE if rate is None else float(rate)
-    if not np.isfinite(hz) or hz <= 0:
-        raise ValueError(f"rate must be a positive number of Hz, got {rate!r}")
+    problem = period_problem(1.0 / hz) if np.isfinite(hz) and hz > 0 else "not positive"
+    if problem is not None:
+        raise ValueError(
+            f"rate must be a number of frames per second with a period of "
+            f"{MIN_FRAME_PERIOD:g}–{MAX_FRAME_PERIOD:g} s, got {rate!r}"
+        )
     try:
         roles = resolve_rig(path, skel.names, arm, preset, mapping, kind="bone")
     except MissingPointError as exc:
