@@ -328,6 +328,71 @@ class AmcMotion:
     first_frame: int
 
 
+def _parse_amc_regular(path: str, lines: list[str], dof_count: dict[str, int]) -> AmcMotion | None:
+    """The common case in a few array operations: every frame lists the same bones in the
+    same order, no comment in the body. ``None`` for anything else (or anything wrong): the
+    line-by-line parser then reads the file and names the line at fault."""
+    header = 0
+    angle_unit = None
+    for line in lines:
+        text = line.strip()
+        if text.isdigit():
+            break
+        if text.startswith(":"):
+            word = text[1:].split()[0].upper() if len(text) > 1 else ""
+            angle_unit = {"DEGREES": "deg", "RADIANS": "rad"}.get(word, angle_unit)
+        elif text and not text.startswith("#"):
+            return None
+        header += 1
+    body = lines[header:]
+    if not body:
+        return None
+    layout: list[tuple[str, int]] = []
+    for line in body[1:]:
+        toks = line.split()
+        if not toks or toks[0].isdigit():
+            break
+        layout.append((toks[0], len(toks) - 1))
+    if sorted(layout) != sorted(dof_count.items()):
+        return None
+    width = 1 + sum(1 + k for _, k in layout)
+    tokens = np.array(" ".join(body).split(), dtype=object)
+    if tokens.size == 0 or tokens.size % width:
+        return None
+    table = tokens.reshape(-1, width)
+    name_cols, value_cols = [], []
+    col = 1
+    for _, k in layout:
+        name_cols.append(col)
+        value_cols.append(np.arange(col + 1, col + 1 + k))
+        col += 1 + k
+    names = np.array([name for name, _ in layout])
+    if np.any(table[:, name_cols] != names):
+        return None
+    cols = np.concatenate(value_cols)
+    try:
+        frames = np.fromiter(map(int, table[:, 0]), np.int64, count=table.shape[0])
+        numbers = np.fromiter(
+            map(float, table[:, cols].ravel()), np.float64, count=table.shape[0] * cols.size
+        )
+    except ValueError:
+        return None
+    numbers = numbers.reshape(table.shape[0], cols.size)
+    if np.any(np.diff(frames) != 1) or not np.all(np.isfinite(numbers)):
+        return None
+    values, start = {}, 0
+    for name, k in layout:
+        values[name] = np.ascontiguousarray(numbers[:, start : start + k])
+        start += k
+    return AmcMotion(
+        path=path,
+        n_frames=int(frames.size),
+        values=values,
+        angle_unit=angle_unit,
+        first_frame=int(frames[0]),
+    )
+
+
 def parse_amc(path: str | os.PathLike[str], skeleton: AsfSkeleton) -> AmcMotion:
     """Parse an AMC file against ``skeleton`` (bone names and dof counts are checked).
 
@@ -340,8 +405,11 @@ def parse_amc(path: str | os.PathLike[str], skeleton: AsfSkeleton) -> AmcMotion:
     """
     path = os.fspath(path)
     lines = _read_lines(path)
-    angle_unit = None
     dof_count = {b.name: len(b.dof) for b in skeleton.bones if b.dof}
+    fast = _parse_amc_regular(path, lines, dof_count)
+    if fast is not None:
+        return fast
+    angle_unit = None
     rows: dict[str, list[list[str]]] = {name: [] for name in dof_count}
     row_lines: dict[str, list[int]] = {name: [] for name in dof_count}
     frame_numbers: list[int] = []
