@@ -58,7 +58,7 @@ CASES = [
     (["learn", "--out", "m.npz", "--resample", "1e-9"], 2, "frame period in seconds between"),
     (["learn", "--out", "m.pkl"], 2, "name it m.npz"),
     (["learn", "--out", "m.npz", "--cutoff", "1.5"], 2, "between 0 and 1"),
-    (["learn", "--out", "m.npz", "--components", "500", "--samples", "100"], 2, "--components"),
+    (["learn", "--out", "m.npz", "--components", "700", "--samples", "100"], 2, "--components"),
     (["learn", "--out", "m.npz", "--mapping", "{bad json"], 2, "--mapping"),
     (["learn", ".", "--out", "m.npz", "--arm", "middle"], 2, "--arm"),
     (["learn", ".", "--generated", "--out", "m.npz"], 2, "not both"),
@@ -215,7 +215,7 @@ def test_reader_options_reach_read_many(tmp_path, monkeypatch, capsys):
     assert seen["on_error"] == "warn" and seen["arm"] == "right" and "mapping" not in seen
 
 
-def test_short_trials_are_left_out_with_a_warning(tmp_path, monkeypatch, capsys):
+def test_short_trials_kept_left_out_or_refused(tmp_path, monkeypatch, capsys):
     import dataclasses
 
     import visprim.io
@@ -225,14 +225,24 @@ def test_short_trials_are_left_out_with_a_warning(tmp_path, monkeypatch, capsys)
     short = dataclasses.replace(t, times=t.times[:20], markers=t.markers[:20], truth=None)
     short = dataclasses.replace(short, joints=None, body_frame=None, name="tiny")
     monkeypatch.setattr(visprim.io, "read_many", lambda paths, **kw: [short, *trials[1:]])
-    argv = ["learn", str(tmp_path), "--out", str(tmp_path / "m.npz"), "--clusters", "6"]
-    assert run(argv) == 0
+
+    def learn(name: str, *options: str) -> int:
+        out = str(tmp_path / name)
+        return run(["learn", str(tmp_path), "--out", out, "--clusters", "6", *options])
+
+    # Default: kept, filtered with less padding (the model says so in its summary).
+    assert learn("a.npz") == 0
+    assert "1 trial(s) shorter than the filter padding" in capsys.readouterr().out
+    assert learn("b.npz", "--short", "drop") == 0
+    captured = capsys.readouterr()
     assert "left out 1 trial(s) with no more frames than the filter padding (33): tiny (20 " in (
-        capsys.readouterr().err
+        captured.err
     )
-    assert run([*argv[:3], str(tmp_path / "e.npz"), "--clusters", "6", "--short", "error"]) == 1
+    assert captured.out.startswith("39 trials -> ")
+    assert learn("c.npz", "--short", "error") == 1
     line = one_error_line(capsys, "learn")
-    assert "tiny (20 frames)" in line and "--short 'reduce'" not in line
+    assert "tiny (20 frames)" in line and "--short reduce" in line
+    assert not (tmp_path / "c.npz").exists()
 
 
 def test_option_choices_match_the_readers():
@@ -244,12 +254,12 @@ def test_option_choices_match_the_readers():
 
 
 def test_learn_real_recordings_as_given(shared_data, tmp_path, capsys):
-    """A folder of real recordings with one too short for the filter works with the
-    defaults (the whole ../shared/data as well: see the README)."""
+    """A folder of real recordings, one of them shorter than the filter's padding, learns
+    with the defaults (the whole ../shared/data as well: see the README)."""
     folder = shared_data / "bandai_namco_ds1_extra"
     out = tmp_path / "m.npz"
     assert run(["learn", str(folder), "--out", str(out), "--clusters", "5"]) == 0
     captured = capsys.readouterr()
-    assert "left out 1 trial(s)" in captured.err and "dataset-1_run_normal_001" in captured.err
+    assert "1 trial(s) shorter than the filter padding (padded less)" in captured.out
     assert f"model written to {out}" in captured.out
     assert np.isfinite(np.load(out)["cluster_centers"]).all()

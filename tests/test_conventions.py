@@ -69,7 +69,7 @@ def test_mypy_configuration():
     for override in mypy["overrides"]:
         if override.get("ignore_missing_imports"):
             ignored |= set(override["module"])
-    assert ignored == {"dartpy", "ezc3d"}
+    assert "dartpy" in ignored and ignored <= {"dartpy", "ezc3d"}
     dev = " ".join(PYPROJECT["project"]["optional-dependencies"]["dev"])
     for package in ("mypy", "scipy-stubs", "types-tqdm", "sphinx", "numpydoc"):
         assert package in dev, package

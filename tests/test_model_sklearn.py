@@ -62,17 +62,19 @@ def test_transformer_and_clusterer(trials) -> None:
     np.testing.assert_allclose(p, m.transform(trials), atol=1e-10)
     labels = PrimitiveModel(n_components=6, n_clusters=4, n_init=2).fit_predict(trials)
     np.testing.assert_array_equal(labels, m.labels_)
-    assert m.n_features_in_ == 4 * m.n_samples == 400
+    assert m.n_features_in_ == m.dim == m.n_channels * m.n_samples
 
 
 def test_fit_on_segment_vectors_matches_fit_on_trials(trials) -> None:
     a = PrimitiveModel(n_components=6, n_clusters=4, n_init=2).fit(trials)
     b = PrimitiveModel(n_components=6, n_clusters=4, n_init=2).fit(a.training_vectors_)
-    assert b.n_features_in_ == 400
+    assert b.n_features_in_ == a.dim
     np.testing.assert_allclose(b.cluster_centers_, a.cluster_centers_, atol=1e-9)
     np.testing.assert_array_equal(b.predict(a.training_vectors_), a.labels_)
     assert np.all(np.isnan(b.primitive_durations_)) and np.all(b.segment_trial_ == -1)
-    with pytest.raises(ValueError, match="X has 8 features, but PrimitiveModel is expecting 400"):
+    with pytest.raises(
+        ValueError, match=f"X has 8 features, but PrimitiveModel is expecting {a.dim}"
+    ):
         b.transform(np.zeros((3, 8)))
 
 

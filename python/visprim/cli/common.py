@@ -130,7 +130,8 @@ def load_source(source: dict[str, Any], lowpass: tuple[int, float] | None = None
             dict(source.get("options") or {}),
             on_error="warn",
         )
-        return trials if lowpass is None else drop_short(trials, lowpass, "drop")
+        mode = str(source.get("short", "reduce"))
+        return trials if lowpass is None else drop_short(trials, lowpass, mode)
     raise CLIError(f"unknown data source {source!r} recorded in the model; give DATA instead")
 
 
@@ -191,12 +192,15 @@ def trials_and_source(
         options = reader_options(args)
         on_error = "raise" if getattr(args, "strict", False) else "warn"
         trials = read_files(data, resample, options, on_error=on_error)
+        short = str(getattr(args, "short", "reduce"))
         if lowpass is not None:
-            trials = drop_short(trials, lowpass, getattr(args, "short", "error"))
+            trials = drop_short(trials, lowpass, short)
         paths = [str(Path(p).resolve()) for p in data]
         source: dict[str, Any] = {"kind": "files", "paths": paths, "resample": resample}
         if options:
             source["options"] = options
+        if short == "drop":
+            source["short"] = short
         return trials, source
     source = generated_source(args)
     return load_source(source), source
@@ -232,7 +236,7 @@ def add_reader_options(p: argparse.ArgumentParser, *, many: bool = True) -> None
     g.add_argument(
         "--arm",
         default="right",
-        help="arm to read: right (default) or left (the values visprim.io.read_pieces takes)",
+        help="arm to read: right (default), left or both",
     )
     g.add_argument(
         "--skeleton", metavar="ASF", default=None, help="AMC files: the .asf skeleton to use"
@@ -275,10 +279,10 @@ def add_reader_options(p: argparse.ArgumentParser, *, many: bool = True) -> None
         return
     g.add_argument(
         "--short",
-        choices=("drop", "error"),
-        default="drop",
-        help="recordings with no more frames than the low-pass filter's padding: leave them "
-        "out with a warning (default) or stop with an error",
+        choices=("reduce", "drop", "error"),
+        default="reduce",
+        help="recordings with no more frames than the low-pass filter's padding: filter them "
+        "with less padding (default), leave them out with a warning, or stop with an error",
     )
     g.add_argument(
         "--strict",
@@ -337,10 +341,10 @@ def reader_options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def drop_short(trials: list[Trial], lowpass: tuple[int, float], mode: str) -> list[Trial]:
-    """Trials with no more frames than the padding of the ``lowpass`` (order, cutoff) filter,
-    left out with a warning (``mode="drop"``) or left in (``"error"``: the filter names
-    them)."""
-    if mode != "drop":
+    """``--short``: trials with no more frames than the padding of the ``lowpass`` (order,
+    cutoff) filter are kept (``"reduce"``: the model filters them with less padding), left
+    out with a warning (``"drop"``) or refused (``"error"``)."""
+    if mode == "reduce":
         return trials
     from visprim.filtering import butterworth, default_padlen
 
@@ -348,9 +352,14 @@ def drop_short(trials: list[Trial], lowpass: tuple[int, float], mode: str) -> li
     pad = default_padlen(butterworth(order, cutoff))
     kept = [t for t in trials if t.n_frames > pad]
     dropped = [t for t in trials if t.n_frames <= pad]
+    names = ", ".join(f"{t.name} ({t.n_frames} frames)" for t in dropped[:5])
+    more = f" and {len(dropped) - 5} more" if len(dropped) > 5 else ""
+    if dropped and mode == "error":
+        raise CLIError(
+            f"{len(dropped)} trial(s) have no more frames than the filter padding ({pad}): "
+            f"{names}{more}; pass --short reduce (pad them less) or --short drop"
+        )
     if dropped:
-        names = ", ".join(f"{t.name} ({t.n_frames} frames)" for t in dropped[:5])
-        more = f" and {len(dropped) - 5} more" if len(dropped) > 5 else ""
         log.warning(
             "left out %d trial(s) with no more frames than the filter padding (%d): %s%s",
             len(dropped),
@@ -396,6 +405,25 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
         "--window", type=positive_float, default=0.3, help="SEG-1 window, s (default 0.3)"
     )
     g.add_argument(
+        "--features",
+        choices=("directions", "zyz"),
+        default=None,
+        help="what segments are made of: bone directions (default) or the paper's Z-Y-Z angles",
+    )
+    g.add_argument(
+        "--seg2-tuning",
+        choices=("robust", "repetitions"),
+        default=None,
+        help="how SEG-2's c is tuned: to the corpus' speed (default) or the paper's rule "
+        "from the repetitions",
+    )
+    g.add_argument(
+        "--paper",
+        action="store_true",
+        help="the paper's exact method (Z-Y-Z angles, c from repetitions, fixed SEG-1 "
+        "window) unless --features / --seg2-tuning say otherwise",
+    )
+    g.add_argument(
         "--seg2-threshold",
         type=positive_float,
         default=None,
@@ -431,7 +459,11 @@ MODEL_OPTIONS = {
 def model_from_args(args: argparse.Namespace, **overrides: Any) -> Any:
     from visprim.model import PrimitiveModel
 
+    paper = bool(getattr(args, "paper", False))
     params = dict(
+        features=getattr(args, "features", None) or ("zyz" if paper else "directions"),
+        seg2_tuning=getattr(args, "seg2_tuning", None) or ("repetitions" if paper else "robust"),
+        seg1_adaptive=not paper,
         segmentation=args.segmentation,
         filter_order=args.filter_order,
         cutoff=args.cutoff,
@@ -445,12 +477,13 @@ def model_from_args(args: argparse.Namespace, **overrides: Any) -> Any:
         seed=args.seed,
     )
     params.update(overrides)
-    if params["n_components"] > 4 * params["n_samples"]:
+    model = PrimitiveModel(**params)
+    if params["n_components"] > model.dim:
         raise UsageError(
             f"--components {params['n_components']} exceeds the segment vector dimension "
-            f"4 x --samples = {4 * params['n_samples']}; lower --components"
+            f"{model.dim} (channels x --samples); lower --components"
         )
-    return PrimitiveModel(**params)
+    return model
 
 
 def load_model(path: str) -> Any:
@@ -481,8 +514,12 @@ def summary(model: Any, n_trials: int) -> str:
     """One line on a fitted model: segments, SEG-2 c, f and k."""
     thr = model.seg2_threshold_
     c = f", SEG-2 c = {thr:.4g} (rad/s)^2" if thr is not None else ""
+    empty = getattr(model, "n_trials_without_segments_", 0)
+    short = getattr(model, "n_short_trials_", 0)
+    notes = f"; {empty} trial(s) without a segment" if empty else ""
+    notes += f"; {short} trial(s) shorter than the filter padding (padded less)" if short else ""
     return (
         f"{n_trials} trials -> {model.n_training_segments_} {label(model.segmentation)} "
         f"segments{c}; PCA f = {model.n_components} of {model.dim}; "
-        f"k-means k = {model.n_primitives} (inertia {model.inertia_:.4g} rad^2)"
+        f"k-means k = {model.n_primitives} (inertia {model.inertia_:.4g} rad^2){notes}"
     )
