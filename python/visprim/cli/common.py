@@ -22,7 +22,7 @@ from typing import Any
 
 from visprim.trial import Trial
 
-_DEFAULT_GENERATED = {"n_subjects": 11, "n_stimuli": 20, "seed": 0}
+_DEFAULT_GENERATED = {"n_subjects": 11, "n_stimuli": 20, "seed": 0, "preset": "paper"}
 #: Frame period (s) recordings are resampled to by default: the original study's 34 ms.
 DEFAULT_RESAMPLE_S = 0.034
 
@@ -36,6 +36,7 @@ def generated_source(args: argparse.Namespace) -> dict[str, Any]:
         "n_subjects": int(getattr(args, "subjects", 11)),
         "n_stimuli": int(getattr(args, "stimuli", 20)),
         "seed": int(getattr(args, "data_seed", 0)),
+        "preset": str(getattr(args, "preset", "paper")),
     }
 
 
@@ -45,10 +46,12 @@ def load_source(source: dict[str, Any]) -> list[Trial]:
     if kind == "generated":
         from visprim.datasets import imitation_experiment
 
+        # Sources written before the presets existed describe the "strokes" generator.
         return imitation_experiment(
             int(source.get("n_subjects", 11)),
             int(source.get("n_stimuli", 20)),
             int(source.get("seed", 0)),
+            preset=str(source.get("preset", "strokes")),
         )
     if kind == "files":
         return read_files(list(source.get("paths", [])), source.get("resample"))
@@ -99,6 +102,12 @@ def add_generated_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--subjects", type=int, default=11, help="subjects (default 11)")
     g.add_argument("--stimuli", type=int, default=20, help="stimuli (default 20)")
     g.add_argument("--data-seed", type=int, default=0, help="generator seed (default 0)")
+    g.add_argument(
+        "--preset",
+        choices=("paper", "strokes"),
+        default="paper",
+        help="generator preset: paper-like gestures (default) or easy strokes",
+    )
 
 
 def add_model_options(p: argparse.ArgumentParser) -> None:
@@ -165,10 +174,13 @@ def label(method: str) -> str:
 
 def summary(model: Any, n_trials: int) -> str:
     """One line on a fitted model: segments, SEG-2 c, f and k."""
+    import math
+
+    deg2 = math.degrees(1.0) ** 2
     thr = model.seg2_threshold_
-    c = f", SEG-2 c = {thr:.4g} (rad/s)^2" if thr is not None else ""
+    c = f", SEG-2 c = {thr * deg2:.4g} (deg/s)^2" if thr is not None else ""
     return (
         f"{n_trials} trials -> {model.n_training_segments_} {label(model.segmentation)} "
         f"segments{c}; PCA f = {model.n_components} of {model.dim}; "
-        f"k-means k = {model.n_primitives} (inertia {model.inertia_:.4g} rad^2)"
+        f"k-means k = {model.n_primitives} (inertia {model.inertia_ * deg2:.4g} deg^2)"
     )

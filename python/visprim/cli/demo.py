@@ -15,43 +15,48 @@ def run(args: argparse.Namespace) -> int:
     from visprim.modelfile import save_model
     from visprim.progress import stages
     from visprim.report import format_segmentation_scores, segmentation_scores, write_report
+    from visprim.report.paper import comparison_markdown, tables_in_degrees
 
     t0 = time.perf_counter()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     source = common.generated_source(args)
-    log: list[str] = []
-
-    def say(text: str = "") -> None:
-        print(text, flush=True)
-        log.append(text)
 
     with stages(7, "demo") as st:
         st.step("generating the experiment")
-        trials = imitation_experiment(source["n_subjects"], source["n_stimuli"], source["seed"])
+        trials = imitation_experiment(
+            source["n_subjects"], source["n_stimuli"], source["seed"], preset=source["preset"]
+        )
         n_true = len({int(v) for t in trials for v in t.truth.labels})  # type: ignore[union-attr]
-        say(
-            f"Generated experiment: {len(trials)} trials ({source['n_subjects']} subjects x "
-            f"{source['n_stimuli']} stimuli, seed {source['seed']}), {n_true} true stroke "
-            "primitives."
+        print(
+            f"Generated experiment ({source['preset']!r} preset): {len(trials)} trials "
+            f"({source['n_subjects']} subjects x {source['n_stimuli']} stimuli, seed "
+            f"{source['seed']}), {n_true} true stroke kinds. Units: degrees, deg^2.",
+            flush=True,
         )
 
         st.step("segmentation scores")
         scores = segmentation_scores(common.model_from_args(args), trials)
-        say("\nSegmentation against the true stroke boundaries (±100 ms):")
-        say(format_segmentation_scores(scores))
+        print("\nSegmentation against the true stroke boundaries (±100 ms):")
+        print(format_segmentation_scores(scores), flush=True)
 
         models = {}
+        tables = {}
         for method in ("seg1", "seg2"):
             st.step(f"learning with {common.label(method)}")
             model = common.model_from_args(args, segmentation=method)
             model.fit(trials, source=source)
             models[method] = model
             path = save_model(model, out / f"model_{method}.npz")
-            say(f"{common.label(method)}: {common.summary(model, len(trials))}; saved {path}")
-            tables = model.error_table()
-            say(f"\nTables 1-3 ({common.label(method)} model):\n")
-            say(tables.to_markdown())
+            print(f"{common.label(method)}: {common.summary(model, len(trials))}; saved {path}")
+            tables[method] = model.error_table()
+            print(f"\nTables 1-3 ({common.label(method)} model, deg^2 and deg):\n")
+            print(tables_in_degrees(tables[method]).to_markdown(), flush=True)
+
+        comparison = comparison_markdown(tables)
+        print("Comparison with the paper (Table 3, total angular error):\n")
+        print(comparison, flush=True)
+        (out / "paper_comparison.md").write_text(comparison, encoding="utf-8")
 
         st.step("classification")
         from visprim.classify import score_against_truth
@@ -59,39 +64,28 @@ def run(args: argparse.Namespace) -> int:
         k_model = common.model_from_args(args, n_clusters=n_true)
         k_model.fit(trials, source=source)
         cls = score_against_truth(k_model, trials)
-        say(
-            f"Classification at k = {n_true} (number of true stroke primitives), SEG-2 "
-            f"segments: {cls}"
+        print(
+            f"Classification at k = {n_true} (number of true stroke kinds), SEG-2 segments: {cls}"
         )
 
         st.step("report")
+        gifs = _demo_sim(models["seg2"], out / "primitives", args)
         rep = write_report(
             models["seg2"],
             out,
             trials,
-            extra_sections=[("visprim demo output", "\n".join(log))],
             title="visprim demo: primitives of the generated imitation experiment (SEG-2)",
+            comparison=comparison,
+            gifs=gifs,
         )
-    gifs = _demo_sim(models["seg2"], out / "primitives", args)
     elapsed = time.perf_counter() - t0
     print()
-    print(f"Report:  {rep.index}  (figures, tables1-3 .md/.csv, index.html)")
+    print(f"Report:  {rep.index}  (figures, tables1-3 .md/.csv, paper_comparison.md, index.html)")
     print(f"Models:  {out / 'model_seg2.npz'}, {out / 'model_seg1.npz'}")
     if gifs:
         print(f"Primitives on the simulated humanoid: {', '.join(str(g) for g in gifs)}")
     print(f"Done in {elapsed:.1f} s.")
     return 0
-
-
-def _demo_sim(model: Any, out_dir: Path, args: argparse.Namespace) -> list[Path]:
-    if args.no_sim:
-        return []
-    try:
-        from visprim.sim.showcase import demo_primitives
-    except ImportError as exc:
-        print(f"note: the humanoid simulation is not available ({exc}); no primitive GIFs")
-        return []
-    return list(demo_primitives(model, out_dir, n=args.sim_primitives))
 
 
 def _demo_sim(model: Any, out_dir: Path, args: argparse.Namespace) -> list[Path]:

@@ -10,7 +10,11 @@ def run(args: argparse.Namespace) -> int:
     from visprim.datasets import export_experiment
 
     paths = export_experiment(
-        args.out, n_subjects=args.subjects, n_stimuli=args.stimuli, seed=args.seed
+        args.out,
+        n_subjects=args.subjects,
+        n_stimuli=args.stimuli,
+        seed=args.seed,
+        preset=args.preset,
     )
     print(f"wrote {len(paths)} trial files to {args.out}")
     return 0
@@ -23,4 +27,10 @@ def register(sub: Any) -> None:
     p.add_argument("--subjects", type=int, default=11, help="number of subjects (default 11)")
     p.add_argument("--stimuli", type=int, default=20, help="number of stimuli (default 20)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument(
+        "--preset",
+        choices=("paper", "strokes"),
+        default="paper",
+        help="paper-like gestures (default) or easy strokes",
+    )
     p.set_defaults(func=run)
