@@ -15,7 +15,11 @@ def run(args: argparse.Namespace) -> int:
     from visprim.modelfile import save_model
     from visprim.progress import stages
     from visprim.report import format_segmentation_scores, segmentation_scores, write_report
-    from visprim.report.paper import comparison_markdown, tables_in_degrees
+    from visprim.report.paper import (
+        comparison_markdown,
+        eigenvectors_markdown,
+        tables_in_degrees,
+    )
 
     t0 = time.perf_counter()
     out = Path(args.out)
@@ -56,6 +60,10 @@ def run(args: argparse.Namespace) -> int:
         comparison = comparison_markdown(tables)
         print("Comparison with the paper (Table 3, total angular error):\n")
         print(comparison, flush=True)
+        eig = eigenvectors_markdown({m: models[m].eigenvalues_ for m in models})
+        print("Eigenvectors needed for the same projection error (paper §7: SEG-2 more):\n")
+        print(eig, flush=True)
+        comparison += "\nEigenvectors needed for the same projection error:\n\n" + eig
         (out / "paper_comparison.md").write_text(comparison, encoding="utf-8")
 
         st.step("classification")

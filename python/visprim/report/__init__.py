@@ -175,13 +175,7 @@ def write_report(
     )
     page.add("Data", paragraph(provenance or _provenance(model, trials)))
     if comparison:
-        page.add(
-            "Comparison with the paper (Table 3)",
-            markdown_table(comparison)
-            + "".join(
-                paragraph(ln) for ln in comparison.splitlines() if ln and not ln.startswith("|")
-            ),
-        )
+        page.add("Comparison with the paper (Table 3)", _markdown_blocks(comparison))
 
     # Tables 1-3 ------------------------------------------------------------------
     tables = tables_in_degrees(model.error_table())
@@ -283,6 +277,10 @@ def write_report(
             + f'<div class="gifs">{imgs}</div>',
         )
 
+    page.add(
+        "Model parameters",
+        pre("\n".join(f"{k} = {v!r}" for k, v in sorted(params.items()))),
+    )
     page.write(rep.index)
     rep.files.append(rep.index)
     return rep
@@ -434,6 +432,17 @@ def _trial_figures(
         ),
     )
     return files
+
+
+def _markdown_blocks(text: str) -> str:
+    """Blank-line separated blocks: pipe tables as HTML tables, anything else as text."""
+    out = []
+    for block in text.strip().split("\n\n"):
+        if block.lstrip().startswith("|"):
+            out.append(markdown_table(block))
+        elif block.strip():
+            out.append(paragraph(" ".join(block.split())))
+    return "".join(out)
 
 
 def html_escape(text: str) -> str:

@@ -13,6 +13,9 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+from numpy.typing import ArrayLike
+
 from visprim.errors import ErrorTable, ErrorTables
 
 #: Table 3 of the paper: total angular error (degrees) by segmentation and k.
@@ -86,4 +89,31 @@ def comparison_markdown(tables: dict[str, ErrorTables]) -> str:
         f"rows: the default experiment aims at a ratio within 1/{CALIBRATION_FACTOR:g} and "
         f"{CALIBRATION_FACTOR:g}."
     )
+    return "\n".join(lines) + "\n"
+
+
+#: Projection errors (RMS angle, degrees) at which :func:`eigenvectors_markdown` compares
+#: the number of eigenvectors SEG-1 and SEG-2 need.
+PROJECTION_TARGETS_DEG: tuple[float, ...] = (5.0, 2.0, 1.0, 0.5)
+
+
+def eigenvectors_needed(eigenvalues: ArrayLike, target_deg: float) -> int:
+    """The smallest f whose projection error ``sqrt(Σ_{i>f} λ_i / d)`` (degrees, ``d`` the
+    number of eigenvalues; λ in rad², any order) is at most ``target_deg``."""
+    lam = np.sort(np.clip(np.asarray(eigenvalues, dtype=np.float64), 0.0, None))[::-1]
+    d = lam.size
+    dropped = np.concatenate([np.cumsum(lam[::-1])[::-1], [0.0]])  # dropped[f] = Σ_{i≥f}
+    err = np.degrees(np.sqrt(dropped / d))
+    return int(np.argmax(err <= float(target_deg)))
+
+
+def eigenvectors_markdown(eigenvalues: dict[str, ArrayLike]) -> str:
+    """Eigenvectors each segmentation needs for the same projection error (the paper, §7:
+    SEG-2 needs more than SEG-1), as a Markdown table; ``eigenvalues`` by "seg1"/"seg2"."""
+    methods = [m for m in ("seg1", "seg2") if m in eigenvalues]
+    head = " | ".join(m.replace("seg", "SEG-") for m in methods)
+    lines = [f"| projection error (deg) | {head} |", "|---:|" + "---:|" * len(methods)]
+    for target in PROJECTION_TARGETS_DEG:
+        cells = " | ".join(str(eigenvectors_needed(eigenvalues[m], target)) for m in methods)
+        lines.append(f"| {target:g} | {cells} |")
     return "\n".join(lines) + "\n"
