@@ -50,7 +50,7 @@ def test_gestures_last_three_to_seven_seconds(trials):
 
 def test_the_arm_hangs_near_the_singularity(trials):
     beta = np.concatenate([t.truth.angles[:, 1] for t in trials])
-    assert 0.15 < np.mean(beta < 15 * DEG) < 0.6  # a good part of the time
+    assert 0.15 < np.mean(beta < 20 * DEG) < 0.6  # a good part of the time
     assert beta.min() >= 1 * DEG - 1e-12
     assert beta.max() > 140 * DEG  # and reaches overhead
 
@@ -81,7 +81,7 @@ def test_subjects_differ():
     subs = subjects(11)
     hang = np.array([s.hang for s in subs])
     assert np.ptp(hang[:, 0]) > 90 * DEG  # direction of the hanging arm
-    assert np.all((hang[:, 1] > 3.9 * DEG) & (hang[:, 1] < 12.1 * DEG))
+    assert np.all((hang[:, 1] > 7.9 * DEG) & (hang[:, 1] < 15.1 * DEG))
     assert len({round(s.tempo, 3) for s in subs}) == 11
     assert len({round(s.overlap, 3) for s in subs}) == 11
 

@@ -85,6 +85,7 @@ def run(args: argparse.Namespace) -> int:
             title="visprim demo: primitives of the generated imitation experiment (SEG-2)",
             comparison=comparison,
             gifs=gifs,
+            seg_scores=scores,
         )
     elapsed = time.perf_counter() - t0
     print()

@@ -25,10 +25,11 @@ boundary between strokes is well defined.
 
 Design choices (why these 20):
 
-* **Hanging arm.** 16 of the 20 gestures start and end with the arm hanging (β of a few
+* **Hanging arm.** 19 of the 20 gestures start and end with the arm hanging (β of a few
   degrees: the Z-Y-Z singularity, where γ and α are ill-defined and sensor noise is
-  amplified by 1/sin β); three more pass through it (arm swings, reaches up and down).
-  The paper's subjects stood with their arms at their sides between gestures.
+  amplified by 1/sin β); the paper's subjects stood with their arms at their sides
+  between gestures. Within a gesture the arm stays away from hanging (β ≥ 25° between
+  repetitions).
 * **Many directions.** Reach and point targets are spread over azimuths −60° … 120° and
   elevations 40° … 165°, so strokes of one kind differ in direction, as people's do.
 * **Several cycles.** Waves, swings, hammering and wiping repeat 2–4 times
@@ -56,7 +57,7 @@ STROKE_KINDS: tuple[str, ...] = (
     "windup",  # 7: cocking the arm back before a throw
     "throw",  # 8: fast release forward
     "point",  # 9: reach to a target with a nearly straight arm
-    "swing",  # 10: pendulum swing of the whole arm through hanging
+    "swing",  # 10: pendulum swing of the whole arm across the body
     "curl",  # 11: elbow flexion / extension
 )
 
@@ -236,18 +237,20 @@ GESTURES: tuple[Gesture, ...] = (
         H,
         (),
         (
-            Stroke("windup", (180, 35, 0, 25), 0.7),
+            Stroke("windup", (120, 35, 0, 25), 0.7),
             Stroke("throw", (0, 75, -10, 20), 0.4),
-            _ret(0.8),
+            Stroke("move", (10, 30, -10, 30), 0.7),
         ),
         2,
+        (_ret(0.7),),
     ),
     Gesture(
-        "reach up and down twice",
+        "reach up three times",
         H,
-        (),
-        (_reach((15, 160, -10, 20), 0.9), _ret(0.9)),
+        (_reach((15, 160, -10, 20), 0.9),),
+        (Stroke("move", (10, 40, -10, 30), 0.8), Stroke("move", (15, 160, -10, 20), 0.8)),
         2,
+        (_ret(0.9),),
     ),
     Gesture(
         "reach in four directions",
@@ -263,9 +266,10 @@ GESTURES: tuple[Gesture, ...] = (
     Gesture(
         "three curls, arm at the side",
         H,
-        (),
-        (Stroke("curl", (5, 10, -20, 130), 0.6), Stroke("curl", H, 0.6)),
+        (Stroke("move", (10, 25, -10, 30), 0.6),),
+        (Stroke("curl", (10, 28, -20, 130), 0.6), Stroke("curl", (10, 25, -10, 30), 0.6)),
         3,
+        (_ret(0.6),),
     ),
     Gesture(
         "hammer three times",
@@ -290,12 +294,12 @@ GESTURES: tuple[Gesture, ...] = (
         (_ret(0.8),),
     ),
     Gesture(
-        "swing the arm three times",
+        "swing the arm across three times",
         H,
         (),
         (
-            Stroke("swing", (0, 45, 0, 15), 0.55, bend=(0, -22, 0, 0)),
-            Stroke("swing", (180, 25, 180, 15), 0.6, bend=(0, -32, 0, 0)),
+            Stroke("swing", (60, 45, 0, 15), 0.6, bend=(0, -8, 0, 0)),
+            Stroke("swing", (-40, 40, -20, 20), 0.6, bend=(0, -8, 0, 0)),
         ),
         3,
         (_ret(0.6),),

@@ -9,18 +9,28 @@ boundary F1 ≥ 0.8 at ±100 ms); the method was never tuned.
 * **Posture** (:attr:`Performer.posture_offset`): every target shifted by a per-subject
   offset, SD 7° (γ), 5° (β), 10° (α), 7° (θ): people hold "the same" posture with the
   upper arm a few degrees apart and differ most in humeral rotation, which a video barely
-  shows. Each visit of a target gets a further jitter, SD 11° (γ), 10° (β), 14° (α),
-  11° (θ) (*calibrated*: the paper's subjects imitated each video from memory, so their
+  shows. Each visit of a target gets a further jitter, SD 13° (γ), 11° (β), 16° (α),
+  12° (θ) (*calibrated*: the paper's subjects imitated each video from memory, so their
   endpoints scatter widely; this scatter sets the error at many clusters, k = 100–170).
 * **Amplitude** (:attr:`Performer.amplitude`): displacements from the hanging arm scaled by
   a per-subject factor (SD 0.12, within 0.75–1.25) and per stroke by SD 0.12: some people
   wave big, others small, and nobody repeats an amplitude exactly.
-* **Hanging arm** (:attr:`Performer.hang`): the relaxed arm hangs 4–12° off vertical (the
-  Z-Y-Z singularity at β = 0 is near; below 5° the inverse kinematics interpolates γ) in a
-  direction γ that differs per subject (uniform over ±150°) and per visit (SD 60°, α
-  turning the other way so the forearm keeps its heading; *calibrated*): near β = 0 the
-  direction of a slight tilt is arbitrary, so strokes from and to the hanging arm sweep γ
-  and α by large, random amounts — the reason the paper's errors are large.
+* **Hanging arm** (:attr:`Performer.hang`): the relaxed arm hangs 8–15° off vertical, close
+  to the Z-Y-Z singularity at β = 0, in a direction γ that differs per subject (uniform
+  over ±150°) and per visit (SD 90°, α turning the other way so the forearm keeps its
+  heading; *calibrated*): near β = 0 the direction of a slight tilt is arbitrary. The
+  elbow hangs flexed 15–30° and humeral rotation differs per subject (SD 15°). (Nearer the
+  axis, or with a straighter elbow, the skin-mounted sensors' bias and 2 mm noise make the
+  inverse kinematics' γ and α swing by tens of degrees at rest, which SEG-2 cuts into
+  spurious segments; 8° and 15° keep the SEG-2 boundary F1 above 0.8.)
+* **Paths near the hanging arm**: strokes from and to the hanging arm are straight in
+  swing-twist coordinates (:func:`to_swing`: the upper arm's swing away from vertical as a
+  2-D vector, and the twist γ + α), as a relaxed arm lifts its elbow straight towards the
+  target; the Euler angle γ then turns to the target's azimuth while the arm is still close
+  to vertical, a fast, subject- and visit-dependent sweep of γ and α (*calibrated*: this
+  is what makes SEG-2, whose partition includes the first and last stroke of every
+  movement, need more eigenvectors than SEG-1, which never keeps them). All other
+  strokes are straight in the Euler angles.
 * **Style and imperfect paths** (:attr:`Performer.style`): every stroke bends by a
   per-subject detour (SD 0.12) plus a per-stroke one (SD 0.10), in units of the angle's
   "reach" ``0.5·|Δθ_j| + 0.1·Σ|Δθ|`` (a path bends mostly in the angles that move);
@@ -37,8 +47,9 @@ boundary F1 ≥ 0.8 at ±100 ms); the method was never tuned.
   boundary between blended strokes is the *handover*: the instant in their overlap where
   the next stroke's own joint speed overtakes the current one's.
 * **Pauses**: with a per-subject probability 0.05–0.25, a stop of 0.08–0.3 s between two
-  strokes instead of an overlap, and 0.2–0.4 s after every pointing stroke (the boundary
-  is then the middle of the pause).
+  strokes instead of an overlap, and 0.15–0.3 s after every pointing stroke (the boundary
+  is then the middle of the pause; longer holds put it more than the ±100 ms of the
+  boundary scores from any instant a segmentation can single out inside the rest).
 * **Timing**: a reaction delay of 0.3–0.7 s before the first stroke and a hold of
   0.3–0.7 s after the last (the paper's videos began and ended at rest).
 
@@ -67,7 +78,7 @@ IMITATION_TEMPO = 1.25
 #: Per-subject posture offset SD, degrees (γ, β, α, θ).
 POSTURE_SD_DEG = (7.0, 5.0, 10.0, 7.0)
 #: Per-visit target jitter SD, degrees (γ, β, α, θ).
-VISIT_SD_DEG = (11.0, 10.0, 14.0, 11.0)
+VISIT_SD_DEG = (13.0, 11.0, 16.0, 12.0)
 AMPLITUDE_SD = 0.12
 AMPLITUDE_RANGE = (0.75, 1.25)
 STROKE_AMPLITUDE_SD = 0.12
@@ -80,12 +91,12 @@ OVERLAP_JITTER_SD = 0.08
 LAG_SD_RANGE_S = (0.01, 0.03)
 PAUSE_PROBABILITY_RANGE = (0.05, 0.25)
 PAUSE_RANGE_S = (0.08, 0.3)
-POINT_HOLD_RANGE_S = (0.2, 0.4)
+POINT_HOLD_RANGE_S = (0.15, 0.3)
 LEAD_RANGE_S = (0.3, 0.7)
 TAIL_RANGE_S = (0.3, 0.7)
-HANG_BETA_RANGE_DEG = (4.0, 12.0)
+HANG_BETA_RANGE_DEG = (8.0, 15.0)
 PATH_NOISE_SD = 0.10
-HANG_VISIT_GAMMA_SD_DEG = 60.0
+HANG_VISIT_GAMMA_SD_DEG = 90.0
 
 
 @dataclass(frozen=True)
@@ -144,7 +155,7 @@ def sample_performer(index: int, rng: np.random.Generator) -> Performer:
             rng.uniform(-150.0, 150.0),
             rng.uniform(*HANG_BETA_RANGE_DEG),
             HANG_DEG[2] + rng.normal(0.0, 15.0),
-            rng.uniform(5.0, 25.0),
+            rng.uniform(15.0, 30.0),
         ]
     )
     style = rng.normal(0.0, STYLE_SD, size=4)
@@ -186,6 +197,10 @@ def _is_hang(target: NDArray[np.float64]) -> bool:
 class BlendedMotion:
     """Overlapping minimum-jerk strokes, each angle on its own clock (coarticulation).
 
+    A stroke with ``chart[k]`` moves in swing-twist coordinates (:func:`to_swing`) from
+    ``euler_start[k]``; it contributes the change of the Euler angles along that path.
+    The others move in the Euler angles directly, as below.
+
     ``θ_j(t) = start_j + Σ_k [Δ_kj φ(s_kj) + bend_kj 4φ(s_k)(1 − φ(s_k))] + loops`` with
     ``s_kj = (t − onset_kj) / duration_kj`` clipped to [0, 1] and ``s_k`` the stroke's own
     normalised time. Loops (n turns): "circle" ``γ += A sin 2πnφ, β += B (1 − cos 2πnφ)``,
@@ -208,6 +223,8 @@ class BlendedMotion:
     loop: NDArray[np.float64]
     loop_kind: NDArray[np.int64]
     loop_turns: NDArray[np.float64]
+    chart: NDArray[np.bool_]
+    euler_start: NDArray[np.float64]
     boundaries: NDArray[np.float64]
     labels: NDArray[np.int64]
     end_time: float
@@ -221,10 +238,20 @@ class BlendedMotion:
         """Angles (T, 4) in radians at ``times`` (s)."""
         t = np.asarray(times, dtype=np.float64)
         s = np.clip((t[:, None, None] - self.onset[None]) / self.duration_[None], 0.0, 1.0)
-        out = self.start[None] + np.einsum("tkj,kj->tj", minimum_jerk(s), self.delta)
         sk = np.clip((t[:, None] - self.stroke_onset[None]) / self.stroke_duration[None], 0, 1)
         phi = minimum_jerk(sk)
-        out += np.einsum("tk,kj->tj", 4.0 * phi * (1.0 - phi), self.bend)
+        part = (
+            minimum_jerk(s) * self.delta[None]
+            + (4.0 * phi * (1.0 - phi))[..., None] * (self.bend[None])
+        )
+        out = self.start[None] + part[:, ~self.chart].sum(axis=1)
+        order = np.argsort(t, kind="stable")
+        for k in np.flatnonzero(self.chart):
+            e0 = self.euler_start[k]
+            c = to_swing(e0)[None] + part[order, k]
+            e = np.empty_like(c)
+            e[order] = from_swing(c, reference_gamma=float(e0[0]))
+            out += e - e0[None]
         two_pi = 2.0 * np.pi * phi * self.loop_turns[None]
         circle = self.loop_kind == 1
         eight = self.loop_kind == 2
@@ -234,6 +261,27 @@ class BlendedMotion:
         out[:, 1] = np.clip(out[:, 1], MIN_BETA, MAX_BETA)
         out[:, 3] = np.clip(out[:, 3], *ELBOW_RANGE)
         return out
+
+
+def to_swing(angles: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Euler angles (..., 4) → swing-twist coordinates (β cos γ, β sin γ, γ + α, θ).
+
+    The arm moves along straight lines in these coordinates: the upper arm's *swing* away
+    from hanging as a 2-D vector (no singularity at β = 0, where a reach starts by turning
+    γ at once to the target's azimuth) and the *twist* γ + α that stays defined there."""
+    a = np.asarray(angles, dtype=np.float64)
+    g, b = a[..., 0], a[..., 1]
+    return np.stack([b * np.cos(g), b * np.sin(g), g + a[..., 2], a[..., 3]], axis=-1)
+
+
+def from_swing(c: NDArray[np.float64], reference_gamma: float = 0.0) -> NDArray[np.float64]:
+    """Inverse of :func:`to_swing` for rows in time order: γ is unwrapped in time, its
+    first value on the turn nearest ``reference_gamma``."""
+    g = np.unwrap(np.arctan2(c[:, 1], c[:, 0]))
+    if g.size:
+        g += 2 * np.pi * np.round((reference_gamma - g[0]) / (2 * np.pi))
+    b = np.hypot(c[:, 0], c[:, 1])
+    return np.stack([g, b, c[:, 2] - g, c[:, 3]], axis=1)
 
 
 def perform(gesture: Gesture, who: Performer, rng: np.random.Generator) -> BlendedMotion:
@@ -254,12 +302,35 @@ def perform(gesture: Gesture, who: Performer, rng: np.random.Generator) -> Blend
         p = hang_nominal + scale * (target - hang_nominal) + who.posture_offset
         return _clip(p + np.radians(rng.normal(0.0, VISIT_SD_DEG)))
 
-    start = personal(gesture.start)
-    targets = np.stack([personal(s.target) for s in strokes])
-    prev = np.vstack([start, targets[:-1]])
-    delta = targets - prev
+    start_euler = personal(gesture.start)
+    targets_euler = np.stack([personal(s.target) for s in strokes])
+    # γ and α of each target on the turn nearest the previous one (no 2π jumps).
+    chain = np.vstack([start_euler, targets_euler])
+    chain[:, 0] = np.unwrap(chain[:, 0])
+    chain[:, 2] = np.unwrap(chain[:, 2])
+    cs = to_swing(chain)
+    # Strokes from and to the hanging arm are straight in swing-twist coordinates (see
+    # to_swing); the others are straight in the Euler angles.
+    names = [gesture.start] + [s.target for s in strokes]
+    hang = np.array([n == HANG_DEG for n in names])
+    chart = hang[:-1] | hang[1:]
+    delta = np.where(chart[:, None], cs[1:] - cs[:-1], chain[1:] - chain[:-1])
     travel = np.abs(delta)
-    bend = np.radians(np.asarray([s.bend for s in strokes], dtype=np.float64)) * who.amplitude
+    # Detours given in Euler degrees (γ, β, α, θ); for a swing-twist stroke mapped to those
+    # coordinates at the stroke's middle (first order).
+    mid = 0.5 * (chain[:-1] + chain[1:])
+    bend_e = np.radians(np.asarray([s.bend for s in strokes], dtype=np.float64)) * who.amplitude
+    cg, sg, bm = np.cos(mid[:, 0]), np.sin(mid[:, 0]), mid[:, 1]
+    bend_c = np.stack(
+        [
+            cg * bend_e[:, 1] - bm * sg * bend_e[:, 0],
+            sg * bend_e[:, 1] + bm * cg * bend_e[:, 0],
+            bend_e[:, 0] + bend_e[:, 2],
+            bend_e[:, 3],
+        ],
+        axis=1,
+    )
+    bend = np.where(chart[:, None], bend_c, bend_e)
     # Detours scale with how far each angle moves (plus a little of the whole stroke's
     # travel): the angles that move are the ones whose path bends.
     reach = 0.5 * travel + 0.1 * travel.sum(axis=1, keepdims=True)
@@ -306,7 +377,7 @@ def perform(gesture: Gesture, who: Performer, rng: np.random.Generator) -> Blend
     a_dur = np.maximum(dur[:, None] * stretch, 0.15)
     end_time = float(max(boundaries[k], (a_onset + a_dur).max()) + tail)
     motion = BlendedMotion(
-        start=start,
+        start=chain[0],
         onset=a_onset,
         duration_=a_dur,
         stroke_onset=onset,
@@ -316,6 +387,8 @@ def perform(gesture: Gesture, who: Performer, rng: np.random.Generator) -> Blend
         loop=loop,
         loop_kind=kind,
         loop_turns=turns,
+        chart=chart,
+        euler_start=chain[:-1],
         boundaries=boundaries,
         labels=np.asarray([s.label for s in strokes], dtype=np.int64),
         end_time=end_time,

@@ -130,6 +130,8 @@ def write_report(
     provenance: str | None = None,
     comparison: str | None = None,
     gifs: Sequence[str | Path] = (),
+    seg_scores: dict[str, tuple[float, float, float]] | None = None,
+    classification: str | None = None,
 ) -> Report:
     """Write the report of ``model`` into ``out_dir`` (see the module docstring).
 
@@ -155,6 +157,9 @@ def write_report(
     gifs : sequence of paths
         Animations (e.g. primitives on the simulated humanoid) embedded in the page; paths
         relative to ``out_dir`` or absolute.
+    seg_scores, classification : optional
+        Already computed :func:`segmentation_scores` of ``trials`` and the text of
+        :func:`visprim.classify.score_against_truth` (computed here when None).
     """
     model._check_fitted()
     if trials and trial_name is not None and trial_name not in {t.name for t in trials}:
@@ -207,8 +212,9 @@ def write_report(
 
     # Scores (trials with truth) ------------------------------------------------------
     if trials and all(t.truth is not None for t in trials):
-        seg_scores = segmentation_scores(model, trials)
-        cls = score_against_truth(model, trials)
+        if seg_scores is None:
+            seg_scores = segmentation_scores(model, trials)
+        cls = classification if classification is not None else score_against_truth(model, trials)
         text = format_segmentation_scores(seg_scores)
         (out / "segmentation_scores.md").write_text(text, encoding="utf-8")
         rep.files.append(out / "segmentation_scores.md")
