@@ -318,7 +318,9 @@ def _trial_figures(
     seg2_corpus = model.prepare([trial], segmentation="seg2")
     seg = seg2_corpus.segmentation
     z = seg.z if seg.z is not None else np.zeros_like(times)
-    c_used = float(seg.trial_thresholds[0] if seg.trial_thresholds is not None else seg.threshold)
+    c_used = float(
+        seg.trial_thresholds[0] if seg.trial_thresholds is not None else (seg.threshold or 0.0)
+    )
     segs = seg2_corpus.segments[0]
     files.append(
         figures.plot_seg2(

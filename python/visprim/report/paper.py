@@ -61,7 +61,7 @@ def total_error_by_k(tables: ErrorTables) -> dict[int, float]:
 def comparison_rows(tables: dict[str, ErrorTables]) -> list[tuple[str, int, float, float, float]]:
     """(segmentation, k, paper °, visprim °, ratio) for every k the paper reports and
     ``tables`` (by "seg1" / "seg2") has."""
-    rows = []
+    rows: list[tuple[str, int, float, float, float]] = []
     for method in ("seg2", "seg1"):
         if method not in tables:
             continue
