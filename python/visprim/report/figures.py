@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 from numpy.typing import ArrayLike, NDArray
 
 from visprim.arm import ANGLE_NAMES
@@ -261,6 +262,8 @@ def _curves_grid(
         ax.set_title(titles[i], fontsize=8)
         ax.grid(alpha=0.3)
         ax.tick_params(labelsize=7)
+        ax.xaxis.set_major_locator(MaxNLocator(3))
+        ax.yaxis.set_major_locator(MaxNLocator(4))
         if i % ncols == 0:
             ax.set_ylabel(ylabel, fontsize=8)
         if i >= n - ncols:
