@@ -2,11 +2,12 @@
 
 Usage (from the repository root)::
 
-    .venv/bin/python docs/plot_generated_trial.py [--subject 3] [--stimulus 3] \
-        [--seed 0] [--out docs/generated_trial.png]
+    .venv/bin/python docs/plot_generated_trial.py [--subject 3] [--stimulus 7] \
+        [--seed 0] [--preset paper] [--out docs/generated_trial.png]
 
-The trial is the one of the default experiment (``imitation_experiment(seed=seed)``), so the
-figure shows exactly what the pipeline and the tests receive.
+The trial is the one of the experiment ``imitation_experiment(seed=seed, preset=preset)``
+(default: the paper-like default experiment), so the figure shows exactly what the pipeline
+receives.
 """
 
 from __future__ import annotations
@@ -21,7 +22,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from visprim.arm import ANGLE_NAMES  # noqa: E402
-from visprim.datasets import PRIMITIVE_NAMES, generate_trial, stimuli, subjects  # noqa: E402
+from visprim.datasets import (  # noqa: E402
+    PRIMITIVE_NAMES,
+    STROKE_KINDS,
+    generate_trial,
+    stimuli,
+    subjects,
+)
 from visprim.trial import MARKER_NAMES, Trial  # noqa: E402
 
 ANGLE_LABELS = {
@@ -77,6 +84,7 @@ def plot_trial(trial: Trial, out: str | Path) -> Path:
         fontsize=8, loc="center left", bbox_to_anchor=(1.005, 0.5), title="angle", title_fontsize=8
     )
     ymax = ax.get_ylim()[1]
+    names = STROKE_KINDS if trial.meta.get("preset") == "paper" else PRIMITIVE_NAMES
     for b in truth.boundaries:
         for a_ in axes:
             a_.axvline(b, color="k", ls="--", lw=0.8, alpha=0.6)
@@ -85,7 +93,7 @@ def plot_trial(trial: Trial, out: str | Path) -> Path:
         ax.text(
             mid,
             ymax,
-            PRIMITIVE_NAMES[int(label)].replace("_", " "),
+            names[int(label)].replace("_", " "),
             ha="center",
             va="bottom",
             fontsize=8,
@@ -106,12 +114,13 @@ def plot_trial(trial: Trial, out: str | Path) -> Path:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--subject", type=int, default=3)
-    parser.add_argument("--stimulus", type=int, default=3)
+    parser.add_argument("--stimulus", type=int, default=7)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--preset", choices=("paper", "strokes"), default="paper")
     parser.add_argument("--out", default=str(Path(__file__).with_name("generated_trial.png")))
     args = parser.parse_args()
-    subject = subjects(args.subject + 1, args.seed)[args.subject]
-    stimulus = stimuli(args.stimulus + 1, args.seed)[args.stimulus]
+    subject = subjects(args.subject + 1, args.seed, args.preset)[args.subject]
+    stimulus = stimuli(args.stimulus + 1, args.seed, args.preset)[args.stimulus]
     trial = generate_trial(subject, stimulus, args.stimulus, args.seed)
     print(plot_trial(trial, args.out))
 

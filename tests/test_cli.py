@@ -38,7 +38,13 @@ def learned(tmp_path_factory):
 def test_learn_writes_a_model_and_prints_tables(learned, capsys):
     m = PrimitiveModel.load(learned)
     assert m.n_primitives == 8
-    assert m.training_source_ == {"kind": "generated", "n_subjects": 2, "n_stimuli": 20, "seed": 0}
+    assert m.training_source_ == {
+        "kind": "generated",
+        "n_subjects": 2,
+        "n_stimuli": 20,
+        "seed": 0,
+        "preset": "paper",
+    }
     assert m.error_tables_ is not None
     assert m.get_params()["n_clusters"] == 8
 
@@ -140,5 +146,9 @@ def test_demo_small(tmp_path, capsys):
     for name in ("index.html", "model_seg1.npz", "model_seg2.npz", "primitives.png", "table1.md"):
         assert (out / name).exists(), name
     page = (out / "index.html").read_text(encoding="utf-8")
-    assert "visprim demo output" in page and ".visprim-tmp" not in page
+    assert ".visprim-tmp" not in page
     assert sorted(p.name for p in tmp_path.iterdir()) == ["demo"]  # no temporary left
+    assert "| SEG-2 | 20* | 32.71 |" in printed  # the comparison with the paper's Table 3
+    html = (out / "index.html").read_text(encoding="utf-8")
+    assert "Comparison with the paper" in html and "deg²" in html
+    assert "Tables 1-3 (SEG-1" not in html  # no console dump on the page

@@ -20,12 +20,12 @@ CLEAN = dict(noise=False, skin_offsets=False, drift=False)
 
 @pytest.fixture(scope="module")
 def experiment() -> list[Trial]:
-    return imitation_experiment()
+    return imitation_experiment(preset="strokes")
 
 
 @pytest.fixture(scope="module")
 def clean() -> list[Trial]:
-    return imitation_experiment(4, 20, **CLEAN)
+    return imitation_experiment(4, 20, **CLEAN, preset="strokes")
 
 
 def test_default_experiment_shape(experiment: list[Trial]) -> None:
@@ -74,7 +74,7 @@ def test_extra_stimuli_are_valid_random_chains() -> None:
         stim = random_stimulus(np.random.default_rng(m), m)
         stim.validate()
         assert 3.0 <= stim.nominal_duration <= 5.0
-    trials = imitation_experiment(1, 23, **CLEAN)
+    trials = imitation_experiment(1, 23, **CLEAN, preset="strokes")
     assert [t.stimulus for t in trials] == list(range(23))
 
 
@@ -88,9 +88,9 @@ def test_stroke_durations_and_pauses(experiment: list[Trial]) -> None:
 
 
 def test_determinism() -> None:
-    a = imitation_experiment(2, 3, seed=5)
-    b = imitation_experiment(2, 3, seed=5)
-    c = imitation_experiment(2, 3, seed=6)
+    a = imitation_experiment(2, 3, seed=5, preset="strokes")
+    b = imitation_experiment(2, 3, seed=5, preset="strokes")
+    c = imitation_experiment(2, 3, seed=6, preset="strokes")
     for x, y, z in zip(a, b, c, strict=True):
         assert np.array_equal(x.times, y.times)
         assert np.array_equal(x.markers, y.markers)
@@ -104,7 +104,7 @@ def test_determinism() -> None:
 
 
 def test_a_trial_does_not_depend_on_the_experiment_size(experiment: list[Trial]) -> None:
-    small = imitation_experiment(3, 5)
+    small = imitation_experiment(3, 5, preset="strokes")
     by_name = {t.name: t for t in experiment}
     for t in small:
         assert np.array_equal(t.markers, by_name[t.name].markers)
@@ -125,14 +125,14 @@ def test_subjects_differ(experiment: list[Trial]) -> None:
 @pytest.mark.parametrize("bad", [0, -1, 2.5, "3", True])
 def test_bad_counts_raise(bad: object) -> None:
     with pytest.raises(ValueError, match="n_subjects"):
-        imitation_experiment(n_subjects=bad)  # type: ignore[arg-type]
+        imitation_experiment(n_subjects=bad, preset="strokes")  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="n_stimuli"):
-        imitation_experiment(n_stimuli=bad)  # type: ignore[arg-type]
+        imitation_experiment(n_stimuli=bad, preset="strokes")  # type: ignore[arg-type]
 
 
 def test_bad_seed_raises() -> None:
     with pytest.raises(ValueError, match="seed"):
-        imitation_experiment(1, 1, seed=-3)
+        imitation_experiment(1, 1, seed=-3, preset="strokes")
 
 
 # --- geometry ------------------------------------------------------------------------
@@ -185,7 +185,7 @@ def test_clean_geometry_matches_segment_lengths_and_angles(clean: list[Trial]) -
 
 
 def test_noisy_marker_distances_follow_segment_lengths(experiment: list[Trial]) -> None:
-    no_offsets = imitation_experiment(3, 20, skin_offsets=False)
+    no_offsets = imitation_experiment(3, 20, skin_offsets=False, preset="strokes")
     for trials, max_dev, rms_dev in ((no_offsets, 0.012, 0.004), (experiment, 0.035, 0.02)):
         devs = []
         for t in trials:
@@ -227,8 +227,8 @@ CUTOFF_HZ = 0.25 * 0.5 / 0.034  # Butterworth cutoff 0.25 of Nyquist at 34 ms: 3
 
 def test_drift_is_a_slow_common_translation() -> None:
     kw = dict(noise=False, skin_offsets=True, timing_jitter=False)
-    with_drift = imitation_experiment(2, 20, drift=True, **kw)
-    without = imitation_experiment(2, 20, drift=False, **kw)
+    with_drift = imitation_experiment(2, 20, drift=True, **kw, preset="strokes")
+    without = imitation_experiment(2, 20, drift=False, **kw, preset="strokes")
     rms = []
     for a, b in zip(with_drift, without, strict=True):
         d = a.markers - b.markers
@@ -257,8 +257,8 @@ def test_vibration_is_above_the_filter_cutoff() -> None:
         assert 0.3e-3 < np.sqrt(np.mean(vib**2)) * np.sqrt(3) < 3e-3
     # in the experiment: (noise on) - (noise off) with only vibration enabled
     only_vib = Measurement(noise_sd_m=0.0, distortion_rms_m=0.0)
-    a = imitation_experiment(2, 20, measurement=only_vib)
-    b = imitation_experiment(2, 20, noise=False)
+    a = imitation_experiment(2, 20, measurement=only_vib, preset="strokes")
+    b = imitation_experiment(2, 20, noise=False, preset="strokes")
     fractions = [
         _power_fraction((x.markers - y.markers).reshape(x.n_frames, 12), 0.034, CUTOFF_HZ)
         for x, y in zip(a, b, strict=True)
@@ -268,8 +268,8 @@ def test_vibration_is_above_the_filter_cutoff() -> None:
 
 def test_sensor_error_is_about_2_mm() -> None:
     no_vib = Measurement(vibration_amplitude_m=0.0)
-    a = imitation_experiment(3, 20, measurement=no_vib)
-    b = imitation_experiment(3, 20, noise=False)
+    a = imitation_experiment(3, 20, measurement=no_vib, preset="strokes")
+    b = imitation_experiment(3, 20, noise=False, preset="strokes")
     err = np.concatenate([x.markers - y.markers for x, y in zip(a, b, strict=True)])
     rms_3d = np.sqrt(np.mean(np.sum(err**2, axis=-1)))
     assert 1.5e-3 < rms_3d < 2.6e-3
@@ -286,7 +286,9 @@ def test_sensor_error_is_about_2_mm() -> None:
 
 def test_boundaries_are_at_velocity_minima_of_the_true_angles() -> None:
     fine = Measurement(frame_period_s=0.002)
-    trials = imitation_experiment(3, 20, measurement=fine, timing_jitter=False, **CLEAN)
+    trials = imitation_experiment(
+        3, 20, measurement=fine, timing_jitter=False, **CLEAN, preset="strokes"
+    )
     for t in trials:
         speed = np.linalg.norm(np.gradient(t.truth.angles, t.times, axis=0), axis=1)
         b = t.truth.boundaries

@@ -42,7 +42,7 @@ def smooth_angles(t: np.ndarray) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def clean_experiment() -> list[Trial]:
-    return imitation_experiment(noise=False, skin_offsets=False)
+    return imitation_experiment(noise=False, skin_offsets=False, preset="strokes")
 
 
 def test_generated_noise_free_accuracy(clean_experiment: list[Trial]) -> None:

@@ -24,7 +24,7 @@ HEADER = "time_s," + ",".join(f"{n}_{a}_m" for n in MARKER_NAMES for a in "xyz")
 
 @pytest.fixture(scope="module")
 def trial() -> Trial:
-    return imitation_experiment(1, 5)[4]
+    return imitation_experiment(1, 5, preset="strokes")[4]
 
 
 def _data_rows(path: Path) -> list[str]:

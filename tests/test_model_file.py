@@ -97,7 +97,11 @@ def test_fit_save_load_then_error_table_and_report(tmp_path, monkeypatch):
             monkeypatch.setattr(report.figures, name, blank)
     rep = report.write_report(PrimitiveModel.load(tmp_path / "fresh.npz"), tmp_path / "report")
     assert rep.index.is_file()
-    assert (tmp_path / "report" / "table3.md").read_text() == m.error_table().total.to_markdown()
+    # The report's tables are in the paper's units (deg², degrees).
+    from visprim.report.paper import tables_in_degrees
+
+    expected = tables_in_degrees(m.error_table()).total.to_markdown()
+    assert (tmp_path / "report" / "table3.md").read_text() == expected
 
 
 def test_header_is_documented_json(saved):

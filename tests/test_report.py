@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import math
 import re
 
 import pytest
@@ -53,7 +54,7 @@ def test_index_shows_every_figure_and_table(report):
     html = report.index.read_text(encoding="utf-8")
     srcs = set(re.findall(r'<img src="([^"]+)"', html))
     assert srcs == set(TRIAL_FIGURES) | set(MODEL_FIGURES)
-    assert html.count("<table>") == 3
+    assert html.count("<table>") == 4  # Tables 1-3 and the segmentation scores
     for i in (1, 2, 3):
         assert f'href="table{i}.csv"' in html and f"Table {i}:" in html
     # Extra text is escaped.
@@ -61,15 +62,18 @@ def test_index_shows_every_figure_and_table(report):
     assert "precision" in html and "ARI" in html
 
 
-def test_table_csvs_are_numeric(report):
+def test_table_csvs_are_numeric_and_in_degrees(report):
     model = fitted()
+    deg2 = math.degrees(1.0) ** 2
     for i, table in enumerate(model.error_table(), start=1):
         with open(report.out_dir / f"table{i}.csv", newline="") as fh:
             rows = list(csv.reader(fh))
-        assert rows[0] == list(table.columns)
+        assert rows[0] == [c.replace("(rad^2)", "(deg^2)") for c in table.columns]
         assert len(rows) == len(table.rows) + 1
-        for row in rows[1:]:
-            [float(v) for v in row]
+        for row, ref in zip(rows[1:], table.rows, strict=True):
+            for name, v, r in zip(table.columns, row, ref, strict=True):
+                scale = deg2 if "(rad^2)" in name else 1.0
+                assert float(v) == pytest.approx(r * scale, rel=1e-12)
 
 
 def test_without_trials_only_the_model_part(tmp_path):

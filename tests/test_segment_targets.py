@@ -1,6 +1,7 @@
-"""Segmentation targets on the default generated experiment (11 subjects × 20
-stimuli, seed 0, noise and skin offsets on): IK → low-pass (order 10, cutoff 0.25) → SEG-1 /
-SEG-2, scored against ``truth.boundaries`` at ±100 ms."""
+"""Segmentation targets on the "strokes" generated experiment (11 subjects × 20
+stimuli, seed 0, noise and skin offsets on; the method's mechanics on easy data):
+IK → low-pass (order 10, cutoff 0.25) → SEG-1 / SEG-2, scored against ``truth.boundaries``
+at ±100 ms."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from visprim.trial import Trial
 
 @pytest.fixture(scope="module")
 def experiment() -> tuple[list[Trial], list[np.ndarray]]:
-    trials = imitation_experiment()
+    trials = imitation_experiment(preset="strokes")
     angles = lowpass_corpus(arm_angles_corpus(trials), names=[t.name for t in trials])
     return trials, angles
 

@@ -107,6 +107,7 @@ def generated_source(args: argparse.Namespace) -> dict[str, Any]:
         "n_subjects": int(getattr(args, "subjects", 11)),
         "n_stimuli": int(getattr(args, "stimuli", 20)),
         "seed": int(getattr(args, "data_seed", 0)),
+        "preset": str(getattr(args, "data_preset", "paper")),
     }
 
 
@@ -118,10 +119,12 @@ def load_source(source: dict[str, Any], lowpass: tuple[int, float] | None = None
     if kind == "generated":
         from visprim.datasets import imitation_experiment
 
+        # Sources written before the presets existed describe the "strokes" generator.
         return imitation_experiment(
             int(source.get("n_subjects", 11)),
             int(source.get("n_stimuli", 20)),
             int(source.get("seed", 0)),
+            preset=str(source.get("preset", "strokes")),
         )
     if kind == "files":
         trials = read_files(
@@ -224,6 +227,12 @@ def add_generated_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--subjects", type=positive_int, default=11, help="subjects (default 11)")
     g.add_argument("--stimuli", type=positive_int, default=20, help="stimuli (default 20)")
     g.add_argument("--data-seed", type=seed_int, default=0, help="generator seed (default 0)")
+    g.add_argument(
+        "--data-preset",
+        choices=("paper", "strokes"),
+        default="paper",
+        help="generator preset: paper-like gestures (default) or easy strokes",
+    )
 
 
 # ---------------------------------------------------------------------------- reader options
@@ -512,14 +521,24 @@ def label(method: str) -> str:
 
 def summary(model: Any, n_trials: int) -> str:
     """One line on a fitted model: segments, SEG-2 c, f and k."""
+    import math
+
+    deg2 = math.degrees(1.0) ** 2
     thr = model.seg2_threshold_
-    c = f", SEG-2 c = {thr:.4g} (rad/s)^2" if thr is not None else ""
+    # c in (deg/s)^2: Euler angles in rad, or unit bone directions whose speed is the
+    # bone's angular speed in rad/s.
+    c = f", SEG-2 c = {thr * deg2:.4g} (deg/s)^2" if thr is not None else ""
     empty = getattr(model, "n_trials_without_segments_", 0)
     short = getattr(model, "n_short_trials_", 0)
     notes = f"; {empty} trial(s) without a segment" if empty else ""
     notes += f"; {short} trial(s) shorter than the filter padding (padded less)" if short else ""
+    inertia = (
+        f"{model.inertia_ * deg2:.4g} deg^2"
+        if getattr(model, "features", "zyz") == "zyz"
+        else f"{model.inertia_:.4g}"
+    )
     return (
         f"{n_trials} trials -> {model.n_training_segments_} {label(model.segmentation)} "
         f"segments{c}; PCA f = {model.n_components} of {model.dim}; "
-        f"k-means k = {model.n_primitives} (inertia {model.inertia_:.4g} rad^2){notes}"
+        f"k-means k = {model.n_primitives} (inertia {inertia}){notes}"
     )

@@ -21,16 +21,19 @@ def run(args: argparse.Namespace) -> int:
     from visprim.modelfile import save_model
     from visprim.progress import stages
     from visprim.report import format_segmentation_scores, segmentation_scores, write_report
+    from visprim.report.paper import (
+        comparison_markdown,
+        eigenvectors_markdown,
+        tables_in_degrees,
+    )
 
     t0 = time.perf_counter()
     out = outputs.check_folder(args.out, force=args.force)
     source = common.generated_source(args)
     common.model_from_args(args)  # checks the options before the long work
-    console: list[str] = []
 
     def say(text: str = "") -> None:
         print(text, flush=True)
-        console.append(text)
 
     with (
         outputs.atomic_folder(out, "demo") as tmp,
@@ -38,12 +41,14 @@ def run(args: argparse.Namespace) -> int:
         stages(7, "demo") as st,
     ):
         st.step("generating the experiment")
-        trials = imitation_experiment(source["n_subjects"], source["n_stimuli"], source["seed"])
+        trials = imitation_experiment(
+            source["n_subjects"], source["n_stimuli"], source["seed"], preset=source["preset"]
+        )
         n_true = len({int(v) for t in trials for v in t.truth.labels})  # type: ignore[union-attr]
         say(
-            f"Generated experiment: {len(trials)} trials ({source['n_subjects']} subjects x "
-            f"{source['n_stimuli']} stimuli, seed {source['seed']}), {n_true} true stroke "
-            "primitives."
+            f"Generated experiment ({source['preset']!r} preset): {len(trials)} trials "
+            f"({source['n_subjects']} subjects x {source['n_stimuli']} stimuli, seed "
+            f"{source['seed']}), {n_true} true stroke kinds. Units: degrees, deg^2."
         )
 
         st.step("segmentation scores")
@@ -52,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
         say(format_segmentation_scores(scores))
 
         models = {}
+        tables = {}
         for method in ("seg1", "seg2"):
             st.step(f"learning with {common.label(method)}")
             model = common.model_from_args(args, segmentation=method)
@@ -60,9 +66,18 @@ def run(args: argparse.Namespace) -> int:
             name = f"model_{method}.npz"
             save_model(model, tmp / name)
             say(f"{common.label(method)}: {common.summary(model, len(trials))}; saved {out / name}")
-            tables = model.error_table()
-            say(f"\nTables 1-3 ({common.label(method)} model):\n")
-            say(tables.to_markdown())
+            tables[method] = model.error_table()
+            say(f"\nTables 1-3 ({common.label(method)} model, deg^2 and deg):\n")
+            say(tables_in_degrees(tables[method]).to_markdown())
+
+        comparison = comparison_markdown(tables)
+        say("Comparison with the paper (Table 3, total angular error):\n")
+        say(comparison)
+        eig = eigenvectors_markdown({m: models[m].eigenvalues_ for m in models})
+        say("Eigenvectors needed for the same projection error (paper §7: SEG-2 more):\n")
+        say(eig)
+        comparison += "\nEigenvectors needed for the same projection error:\n\n" + eig
+        (tmp / "paper_comparison.md").write_text(comparison, encoding="utf-8")
 
         st.step("classification")
         from visprim.classify import score_against_truth
@@ -70,24 +85,27 @@ def run(args: argparse.Namespace) -> int:
         k_model = common.model_from_args(args, n_clusters=n_true)
         k_model.fit(trials, source=source)
         cls = score_against_truth(k_model, trials)
-        say(
-            f"Classification at k = {n_true} (number of true stroke primitives), SEG-2 "
-            f"segments: {cls}"
-        )
+        say(f"Classification at k = {n_true} (number of true stroke kinds), SEG-2 segments: {cls}")
 
+        st.step("primitives on the humanoid")
+        tmp_gifs = _demo_sim(models["seg2"], tmp, args)
         st.step("report")
         write_report(
             models["seg2"],
             tmp,
             trials,
-            extra_sections=[("visprim demo output", "\n".join(console))],
             title="visprim demo: primitives of the generated imitation experiment (SEG-2)",
+            comparison=comparison,
+            gifs=tmp_gifs,
+            seg_scores=scores,
         )
-        st.step("primitives on the humanoid")
-        gifs = [outputs.moved(g, tmp, out) for g in _demo_sim(models["seg2"], tmp, args)]
+        gifs = [outputs.moved(g, tmp, out) for g in tmp_gifs]
     elapsed = time.perf_counter() - t0
     print()
-    print(f"Report:  {out / 'index.html'}  (figures, tables1-3 .md/.csv, index.html)")
+    print(
+        f"Report:  {out / 'index.html'}  (figures, tables1-3 .md/.csv, paper_comparison.md, "
+        "index.html)"
+    )
     print(f"Models:  {out / 'model_seg2.npz'}, {out / 'model_seg1.npz'}")
     if gifs:
         print(f"Primitives on the simulated humanoid: {', '.join(str(g) for g in gifs)}")

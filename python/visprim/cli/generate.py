@@ -14,7 +14,11 @@ def run(args: argparse.Namespace) -> int:
     out = outputs.check_folder(args.out, force=args.force)
     with outputs.atomic_folder(out, "generate") as tmp:
         paths = export_experiment(
-            tmp, n_subjects=args.subjects, n_stimuli=args.stimuli, seed=args.seed
+            tmp,
+            n_subjects=args.subjects,
+            n_stimuli=args.stimuli,
+            seed=args.seed,
+            preset=args.preset,
         )
     print(f"wrote {len(paths)} trial files to {out}")
     return 0
@@ -32,4 +36,10 @@ def register(sub: Any) -> None:
         "--stimuli", type=common.positive_int, default=20, help="number of stimuli (default 20)"
     )
     p.add_argument("--seed", type=common.seed_int, default=0, help="random seed (default 0)")
+    p.add_argument(
+        "--preset",
+        choices=("paper", "strokes"),
+        default="paper",
+        help="paper-like gestures (default) or easy strokes",
+    )
     p.set_defaults(func=run)

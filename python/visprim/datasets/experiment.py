@@ -1,11 +1,27 @@
-"""The generated imitation experiment: subjects × stimuli trials with ground truth."""
+"""The generated imitation experiment: subjects × stimuli trials with ground truth.
+
+Two presets share the measurement model (:mod:`visprim.datasets.measurement`):
+
+* ``"paper"`` (default): 20 composite gestures (:mod:`visprim.datasets.gestures`) imitated
+  with coarticulation, personal style and a hanging arm
+  (:mod:`visprim.datasets.imitation`) — calibrated so that the demo's error tables are
+  as large as the paper's;
+* ``"strokes"``: 15 minimum-jerk strokes between 8 key postures, every stroke ending at
+  rest (:mod:`visprim.datasets.vocabulary`, :mod:`visprim.datasets.stimuli`,
+  :mod:`visprim.datasets.subjects`) — easy, fast data for tests of the method's
+  mechanics.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
+from visprim.datasets.gestures import GESTURES, Gesture, jittered_gesture
+from visprim.datasets.imitation import Performer, sample_performer
+from visprim.datasets.imitation import perform as perform_gesture
 from visprim.datasets.measurement import (
     Measurement,
     place_sensors,
@@ -18,6 +34,9 @@ from visprim.datasets.measurement import (
 from visprim.datasets.stimuli import STIMULI, Stimulus, random_stimulus
 from visprim.datasets.subjects import Subject, perform, sample_subject
 from visprim.trial import Trial, Truth
+
+#: The generator presets (see the module docstring); the first is the default.
+PRESETS: tuple[str, ...] = ("paper", "strokes")
 
 # Independent random streams: SeedSequence(seed, spawn_key=(domain, ...)). Subject s and
 # trial (s, m) get the same numbers whatever n_subjects / n_stimuli are.
@@ -35,24 +54,39 @@ def _check_count(name: str, value: int) -> int:
     return int(value)
 
 
-def stimuli(n_stimuli: int = 20, seed: int = 0) -> list[Stimulus]:
-    """The first ``n_stimuli`` stimuli: the 20 of :data:`STIMULI`, then random ones."""
+def _check_preset(preset: str) -> str:
+    if preset not in PRESETS:
+        raise ValueError(f"unknown preset {preset!r}; known: {', '.join(PRESETS)}")
+    return preset
+
+
+def stimuli(n_stimuli: int = 20, seed: int = 0, preset: str = "paper") -> list[Any]:
+    """The first ``n_stimuli`` stimuli of ``preset``: the 20 fixed ones (:data:`GESTURES`
+    for "paper", :data:`STIMULI` for "strokes"), then random ones."""
     n_stimuli = _check_count("n_stimuli", n_stimuli)
+    if _check_preset(preset) == "paper":
+        out: list[Any] = list(GESTURES[:n_stimuli])
+        for m in range(len(out), n_stimuli):
+            base = GESTURES[m % len(GESTURES)]
+            out.append(jittered_gesture(base, _rng(seed, _STIMULUS, m), f"{base.name} ({m})"))
+        return out
     out = list(STIMULI[:n_stimuli])
     for m in range(len(out), n_stimuli):
         out.append(random_stimulus(_rng(seed, _STIMULUS, m), m))
     return out
 
 
-def subjects(n_subjects: int = 11, seed: int = 0) -> list[Subject]:
-    """The first ``n_subjects`` subjects for ``seed``."""
+def subjects(n_subjects: int = 11, seed: int = 0, preset: str = "paper") -> list[Any]:
+    """The first ``n_subjects`` subjects of ``preset`` for ``seed``."""
     n_subjects = _check_count("n_subjects", n_subjects)
+    if _check_preset(preset) == "paper":
+        return [sample_performer(s, _rng(seed, _SUBJECT, s)) for s in range(n_subjects)]
     return [sample_subject(s, _rng(seed, _SUBJECT, s)) for s in range(n_subjects)]
 
 
 def generate_trial(
-    subject: Subject,
-    stimulus: Stimulus,
+    subject: Subject | Performer,
+    stimulus: Stimulus | Gesture,
     stimulus_index: int,
     seed: int = 0,
     *,
@@ -65,7 +99,13 @@ def generate_trial(
     """One subject's imitation of one stimulus, measured (see :func:`imitation_experiment`)."""
     m = measurement or Measurement()
     key = (_TRIAL, subject.index, stimulus_index)
-    motion = perform(stimulus, subject, _rng(seed, *key, _MOTION))
+    rng = _rng(seed, *key, _MOTION)
+    if isinstance(stimulus, Gesture) and isinstance(subject, Performer):
+        motion: Any = perform_gesture(stimulus, subject, rng)
+    elif isinstance(stimulus, Stimulus) and isinstance(subject, Subject):
+        motion = perform(stimulus, subject, rng)
+    else:
+        raise TypeError("generate_trial: subject and stimulus must come from the same preset")
     times = sample_times(motion.duration, _rng(seed, *key, _TIMES) if timing_jitter else None, m)
     angles = motion.angles(times)
     body = subject.body
@@ -104,6 +144,7 @@ def generate_trial(
             "frame_period_s": m.frame_period_s,
             "rate_hz": 1.0 / m.frame_period_s,
             "stimulus_name": stimulus.name,
+            "preset": "paper" if isinstance(stimulus, Gesture) else "strokes",
             "height_m": body.height,
             "segment_lengths_m": {
                 "upper_arm": lengths.upper_arm,
@@ -129,14 +170,15 @@ def imitation_experiment(
     drift: bool = True,
     timing_jitter: bool = True,
     measurement: Measurement | None = None,
+    preset: str = "paper",
 ) -> list[Trial]:
     """Generate the imitation experiment: every subject imitating every stimulus.
 
     Parameters
     ----------
     n_subjects, n_stimuli : int
-        Subjects (default 11) and stimuli (default 20; beyond the 20 of
-        :data:`~visprim.datasets.stimuli.STIMULI`, random valid stimuli are added).
+        Subjects (default 11) and stimuli (default 20; beyond the 20 fixed ones, random
+        variants are added).
     seed : int
         Non-negative seed. Every (subject, stimulus) trial has its own random streams, so
         subject ``s`` imitating stimulus ``m`` is the same trial for any ``n_subjects > s``
@@ -154,6 +196,11 @@ def imitation_experiment(
         Jitter the 34 ms sample instants (SD 0.3 ms).
     measurement : Measurement, optional
         Override the measurement parameters.
+    preset : {"paper", "strokes"}
+        "paper" (default): the 20 composite gestures of
+        :mod:`~visprim.datasets.gestures` with coarticulation and a hanging arm, as hard as
+        the paper's data. "strokes": 15 minimum-jerk strokes between key postures, every
+        stroke ending at rest (easy; for tests of the method's mechanics).
 
     Returns
     -------
@@ -164,15 +211,17 @@ def imitation_experiment(
         (T, 3, 3) in m, ...). ``truth.angles`` (T, 4) rad are the true angles at the sample
         instants; ``truth.boundaries`` (s) are the start of the first stroke, the instant
         between consecutive strokes (the middle of the pause when the subject paused) and
-        the end of the last stroke; ``truth.labels`` index
-        :data:`~visprim.datasets.vocabulary.VOCABULARY`. ``trial.joints`` is None: like
+        the end of the last stroke (with coarticulation, the middle of the overlap of two
+        strokes); ``truth.labels`` index
+        :data:`~visprim.datasets.gestures.STROKE_KINDS` ("paper") or
+        :data:`~visprim.datasets.vocabulary.VOCABULARY` ("strokes"). ``trial.joints`` is None: like
         the original sensors, the generator reports markers only.
     """
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
     seed = int(seed)
-    subs = subjects(n_subjects, seed)
-    stims = stimuli(n_stimuli, seed)
+    subs = subjects(n_subjects, seed, preset)
+    stims = stimuli(n_stimuli, seed, preset)
     return [
         generate_trial(
             subject,
@@ -191,7 +240,11 @@ def imitation_experiment(
 
 
 def export_experiment(
-    out_dir: str | Path, n_subjects: int = 11, n_stimuli: int = 20, seed: int = 0
+    out_dir: str | Path,
+    n_subjects: int = 11,
+    n_stimuli: int = 20,
+    seed: int = 0,
+    preset: str = "paper",
 ) -> list[Path]:
     """Write the experiment as marker CSV files (one per trial) with truth sidecars.
 
@@ -202,5 +255,5 @@ def export_experiment(
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    trials = imitation_experiment(n_subjects, n_stimuli, seed)
+    trials = imitation_experiment(n_subjects, n_stimuli, seed, preset=preset)
     return [write_marker_csv(out / f"{t.name}.csv", t) for t in trials]

@@ -26,11 +26,30 @@ import numpy as np
 from visprim.classify import score_against_truth
 from visprim.model import PrimitiveModel
 from visprim.report import figures
-from visprim.report.html import Page, figure, paragraph, pre, table
+from visprim.report.html import Page, figure, markdown_table, paragraph, pre, table
+from visprim.report.paper import tables_in_degrees
 from visprim.segment import corpus_boundary_scores, truth_pause_halfwidths, zvc
 from visprim.trial import Trial
 
-__all__ = ["Report", "segmentation_scores", "write_report"]
+__all__ = ["Report", "repetitions_text", "segmentation_scores", "write_report"]
+
+#: Frames flagged at each end of a trial in Fig. 6: the zero-phase filter's edge transients
+#: (a 10th-order Butterworth at 0.25 of Nyquist has a group delay of about 12 frames).
+EDGE_FRAMES = 12
+
+UNITS_NOTE = (
+    "Units: angles in degrees, squared errors in deg², angular velocities in deg/s and "
+    "z(t) in (deg/s)² throughout this page (the Python API works in radians)."
+)
+
+
+def repetitions_text(trial: Trial) -> str:
+    """A trial's repetitions for display: the number when known (generated trials, or a
+    reader that found it: ``meta["repetitions"]``), else "unknown" (``Trial.repetitions``
+    defaults to 1 for real recordings)."""
+    if trial.truth is not None or "repetitions" in trial.meta:
+        return str(trial.repetitions)
+    return "unknown"
 
 
 @dataclass
@@ -98,6 +117,11 @@ def write_report(
     trial_name: str | None = None,
     extra_sections: Sequence[tuple[str, str]] = (),
     title: str = "visprim report",
+    provenance: str | None = None,
+    comparison: str | None = None,
+    gifs: Sequence[str | Path] = (),
+    seg_scores: dict[str, tuple[float, float, float]] | None = None,
+    classification: str | None = None,
 ) -> Report:
     """Write the report of ``model`` into ``out_dir`` (see the module docstring).
 
@@ -114,7 +138,18 @@ def write_report(
     trial_name : str, optional
         Which trial to draw (default: the first with 4–8 SEG-2 segments, else the one with most).
     extra_sections : sequence of (heading, preformatted text)
-        Added to the page before the figures (e.g. the demo's console output).
+        Added to the page after the tables.
+    provenance : str, optional
+        Where the data came from (source, files, frame period, resampling); shown first.
+    comparison : str, optional
+        A Markdown table comparing Table 3 with the paper
+        (:func:`visprim.report.paper.comparison_markdown`).
+    gifs : sequence of paths
+        Animations (e.g. primitives on the simulated humanoid) embedded in the page; paths
+        relative to ``out_dir`` or absolute.
+    seg_scores, classification : optional
+        Already computed :func:`segmentation_scores` of ``trials`` and the text of
+        :func:`visprim.classify.score_against_truth` (computed here when None).
     """
     model._check_fitted()
     if trials and trial_name is not None and trial_name not in {t.name for t in trials}:
@@ -124,18 +159,21 @@ def write_report(
     rep = Report(out_dir=out, index=out / "index.html")
     page = Page(title=title)
     params = model.get_params()
-    page.intro = paragraph(
-        f"Model: {model.n_primitives} primitives (k-means clusters) in the space of the first "
-        f"{model.n_components} eigenvectors of {model.n_training_segments_} training segments "
-        f"({method_label(params['segmentation'])}), each resampled to {model.n_samples} "
-        f"samples per angle ({model.dim}-D vectors). Angles in degrees on all axes."
-    ) + pre("\n".join(f"{k} = {v!r}" for k, v in sorted(params.items())))
-
-    for heading, text in extra_sections:
-        page.add(heading, pre(text))
+    page.intro = (
+        paragraph(
+            f"Model: {model.n_primitives} primitives (k-means clusters) in the space of the first "
+            f"{model.n_components} eigenvectors of {model.n_training_segments_} training segments "
+            f"({method_label(params['segmentation'])}), each resampled to {model.n_samples} "
+            f"samples per angle ({model.dim}-D vectors)."
+        )
+        + f'<p class="note">{html_escape(UNITS_NOTE)}</p>'
+    )
+    page.add("Data", paragraph(provenance or _provenance(model, trials)))
+    if comparison:
+        page.add("Comparison with the paper (Table 3)", _markdown_blocks(comparison))
 
     # Tables 1-3 ------------------------------------------------------------------
-    tables = model.error_table()
+    tables = tables_in_degrees(model.error_table())
     md_all = []
     table_html = []
     for i, t in enumerate(tables, start=1):
@@ -152,24 +190,28 @@ def write_report(
     page.add(
         "Error analysis (Tables 1–3)",
         paragraph(
-            "Mean squared error per segment vector (rad²) and the RMS angle error "
-            "sqrt(MSE / d) in degrees. Projection error = sum of the dropped eigenvalues; "
-            "total = projection + clustering (the residuals are orthogonal)."
+            "Mean squared error per segment vector (deg²) and the RMS angle error "
+            "sqrt(MSE / d) in degrees, as the paper reports it. Projection error = sum of the "
+            "dropped eigenvalues; total = projection + clustering (the residuals are "
+            "orthogonal)."
         )
         + "".join(table_html),
     )
+    for heading, text in extra_sections:
+        page.add(heading, pre(text))
 
     # Scores (trials with truth) ------------------------------------------------------
     if trials and all(t.truth is not None for t in trials):
-        seg_scores = segmentation_scores(model, trials)
-        cls = score_against_truth(model, trials)
+        if seg_scores is None:
+            seg_scores = segmentation_scores(model, trials)
+        cls = classification if classification is not None else score_against_truth(model, trials)
         text = format_segmentation_scores(seg_scores)
         (out / "segmentation_scores.md").write_text(text, encoding="utf-8")
         rep.files.append(out / "segmentation_scores.md")
         page.add(
             "Scores against the ground truth",
             paragraph(f"Boundary precision / recall / F1 at ±100 ms over {len(trials)} trials:")
-            + pre(text)
+            + markdown_table(text)
             + paragraph(f"Segment primitives vs true stroke labels: {cls}."),
         )
 
@@ -191,22 +233,21 @@ def write_report(
         "Principal components",
         figure(
             f_eig.name,
-            "Eigenvalues of the covariance of the segment vectors (deg², log "
-            "scale) and the variance kept by the first f eigenvectors.",
+            "Fig. 7: eigenvalues of the covariance of the segment vectors (deg², log "
+            "scale) and the variance left out by the first f eigenvectors (log scale).",
         )
         + figure(
             f_vec.name,
-            "The first four eigenvectors as four angle curves each, scaled "
-            "by the square root of their eigenvalue (cf. the paper's Fig. 8).",
+            "Fig. 8: the first four unit eigenvectors, each drawn as its four angle blocks "
+            "of 100 components.",
         ),
     )
     page.add(
         "Primitives",
         figure(
             f_prim.name,
-            "Cluster centres reconstructed as angle curves: the primitives "
-            "(cf. Fig. 9); titles give the number of member segments and their mean "
-            "duration.",
+            "Fig. 9: cluster centres reconstructed as angle curves, the primitives; "
+            "titles give the number of member segments and their mean duration.",
         ),
     )
 
@@ -221,6 +262,21 @@ def write_report(
         rep.skipped.append(msg)
         page.add("Segmentation and reconstruction", paragraph(msg))
 
+    if gifs:
+        imgs = "".join(
+            f'<img src="{html_escape(_relative(g, out))}" alt="{html_escape(Path(g).stem)}">'
+            for g in gifs
+        )
+        page.add(
+            "Primitives on the simulated humanoid",
+            paragraph("Primitives played back on Adonis (DART simulation).")
+            + f'<div class="gifs">{imgs}</div>',
+        )
+
+    page.add(
+        "Model parameters",
+        pre("\n".join(f"{k} = {v!r}" for k, v in sorted(params.items()))),
+    )
     page.write(rep.index)
     rep.files.append(rep.index)
     return rep
@@ -254,8 +310,8 @@ def _trial_figures(
             c.dof,
             seg1_corpus.segments[0],
             truth_boundaries=truth_b,
-            title=f"Trial {name}: zero-velocity crossings (≥ {model.zvc_threshold_deg:g}° moves) "
-            f"and SEG-1 segments",
+            title=f"Fig. 5: trial {name}, zero-velocity crossings (moves ≥ "
+            f"{model.zvc_threshold_deg:g}°) and the SEG-1 segments",
         )
     )
     # Fig. 6: z(t) and the SEG-2 threshold.
@@ -273,7 +329,8 @@ def _trial_figures(
             c_used,
             segs,
             truth_boundaries=truth_b,
-            title=f"Trial {name}: SEG-2 (z(t) below c delimits the segments)",
+            edge_s=EDGE_FRAMES * float(np.median(np.diff(times))),
+            title=f"Fig. 6: trial {name}, SEG-2 (z(t) below c delimits the segments)",
         )
     )
     # Fig. 11: the whole movement.
@@ -281,15 +338,22 @@ def _trial_figures(
     _, rec_c = model.reconstruct_movement(trial, source="cluster")
     ep = _rms_deg(rec_p, orig)
     ec = _rms_deg(rec_c, orig)
+    # The whole trial: the original everywhere, the reconstruction where segments cover it.
+    full_p = np.full_like(angles, np.nan)
+    full_c = np.full_like(angles, np.nan)
+    where = np.searchsorted(times, t_m)
+    full_p[where] = rec_p
+    full_c[where] = rec_c
     files.append(
         figures.plot_reconstruction(
             out / "movement_reconstruction.png",
-            t_m,
-            orig,
-            rec_p,
-            rec_c,
+            times,
+            angles,
+            full_p,
+            full_c,
             boundaries=np.unique(segs.ravel()),
-            title=f"Trial {name}: whole movement from consecutive SEG-2 segments",
+            title=f"Fig. 11: trial {name}, the whole movement rebuilt from its consecutive "
+            "SEG-2 segments",
             errors_deg=(ep, ec),
         )
     )
@@ -308,41 +372,97 @@ def _trial_figures(
             angles[mask],
             rp,
             rc,
-            title=f"Trial {name}, segment {j} ({s:.2f}–{e:.2f} s, primitive #{label})",
+            title=f"Fig. 10: trial {name}, segment {j} ({s:.2f}–{e:.2f} s, primitive #{label})",
             errors_deg=(_rms_deg(rp, angles[mask]), _rms_deg(rc, angles[mask])),
         )
     )
     page.add(
         "Segmentation",
         paragraph(
-            f"Example trial: {name} ({trial.duration:.2f} s, repetitions {trial.repetitions})."
+            f"Example trial: {name} ({trial.duration:.2f} s, repetitions "
+            f"{repetitions_text(trial)})."
         )
         + figure(
             "segmentation.png",
-            "The four low-passed angles with each angle's "
-            "zero-velocity crossings (dots) and the SEG-1 segments (shaded); dashed: true "
-            "stroke boundaries where known (cf. the paper's Fig. 5).",
+            "Fig. 5: the four low-passed angles, one coloured curve per SEG-1 segment with "
+            "its cut points (bars), each angle's zero-velocity crossings (open dots); "
+            "triangles under the axes: true stroke boundaries where known.",
         )
         + figure(
             "seg2_threshold.png",
-            "z(t) = sum of squared angular velocities with the "
-            "SEG-2 threshold c; the movement is cut inside each dip below c (cf. Fig. 6).",
+            "Fig. 6: z(t) = sum of squared angular velocities, (deg/s)², with the SEG-2 "
+            "threshold c in the same unit; the movement is cut inside each dip below c. "
+            "Shaded: the trial's ends, where the zero-phase filter's edge transients "
+            "dominate z(t).",
         ),
     )
     page.add(
         "Reconstruction",
         figure(
             "segment_reconstruction.png",
-            "One segment and its reconstructions from its "
+            "Fig. 10: one segment and its reconstructions from its "
             "projection on the first f eigenvectors and from its primitive (cluster "
-            "centre), stretched back to the segment's duration (cf. Fig. 10).",
+            "centre), stretched back to the segment's duration.",
         )
         + figure(
             "movement_reconstruction.png",
-            "A whole movement rebuilt from its consecutive SEG-2 segments (cf. Fig. 11).",
+            "Fig. 11: the whole trial and its reconstruction from its consecutive SEG-2 "
+            "segments (none before the first and after the last boundary); RMS errors over "
+            "the segments.",
         ),
     )
     return files
+
+
+def _markdown_blocks(text: str) -> str:
+    """Blank-line separated blocks: pipe tables as HTML tables, anything else as text."""
+    out = []
+    for block in text.strip().split("\n\n"):
+        if block.lstrip().startswith("|"):
+            out.append(markdown_table(block))
+        elif block.strip():
+            out.append(paragraph(" ".join(block.split())))
+    return "".join(out)
+
+
+def html_escape(text: str) -> str:
+    import html
+
+    return html.escape(text)
+
+
+def _relative(path: str | Path, out: Path) -> str:
+    p = Path(path)
+    try:
+        return p.resolve().relative_to(out.resolve()).as_posix()
+    except ValueError:
+        return p.as_posix()
+
+
+def _provenance(model: PrimitiveModel, trials: Sequence[Trial] | None) -> str:
+    src = dict(model.training_source_ or {})
+    kind = src.get("kind")
+    if kind == "generated":
+        text = (
+            f"Generated imitation experiment (visprim.datasets, preset "
+            f"{src.get('preset', 'strokes')!r}): {src.get('n_subjects')} subjects × "
+            f"{src.get('n_stimuli')} stimuli, seed {src.get('seed')}; four sensors every "
+            "34 ms."
+        )
+    elif kind == "files":
+        paths = list(src.get("paths", []))
+        period = src.get("resample")
+        rs = f"resampled to {1000 * float(period):.0f} ms frames" if period else "file rates"
+        shown = ", ".join(paths[:5]) + (f" and {len(paths) - 5} more" if len(paths) > 5 else "")
+        text = f"Recordings: {shown} ({rs})."
+    else:
+        text = "Source not recorded in the model."
+    if trials:
+        periods = [float(np.median(np.diff(t.times))) for t in trials if t.times.size > 1]
+        text += (
+            f" {len(trials)} trials; median frame period {1000 * float(np.median(periods)):.1f} ms."
+        )
+    return text
 
 
 def _rms_deg(a: np.ndarray, b: np.ndarray) -> float:

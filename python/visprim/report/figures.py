@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 from numpy.typing import ArrayLike, NDArray
 
 from visprim.arm import ANGLE_NAMES
@@ -35,6 +36,30 @@ def _save(fig: Figure, path: Path) -> Path:
     return path
 
 
+def _wrap(title: str, width: int = 95) -> str:
+    """Break a long title into lines so that it is never clipped at the figure's edge."""
+    import textwrap
+
+    return "\n".join(textwrap.wrap(title, width)) if len(title) > width else title
+
+
+def _truth_ticks(ax, boundaries: NDArray[np.float64]) -> None:  # type: ignore[no-untyped-def]
+    """True boundaries as small triangles under the axis: nothing like a cut line."""
+    ax.plot(
+        boundaries,
+        np.zeros_like(boundaries),
+        "^",
+        ms=6,
+        color="k",
+        alpha=0.7,
+        transform=ax.get_xaxis_transform(),
+        clip_on=False,
+    )
+
+
+_SEGMENT_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown")
+
+
 def plot_segmentation(
     path: Path,
     times: ArrayLike,
@@ -46,40 +71,57 @@ def plot_segmentation(
     truth_boundaries: ArrayLike | None = None,
     title: str = "",
 ) -> Path:
-    """Paper Fig. 5: the four angles with each angle's zero-velocity crossings (dots) and the
-    SEG-1 segments (shaded); true stroke boundaries as dashed lines when known."""
+    """Paper Fig. 5: the four angles, one coloured curve per SEG-1 segment with its cut
+    points (vertical bars), each angle's zero-velocity crossings (open dots), and the true
+    stroke boundaries, when known, as triangles under each axis (not lines, so they are not
+    taken for cuts). Between segments (SEG-1 does not partition) the angle is drawn grey."""
     t = np.asarray(times)
     a = np.degrees(np.asarray(angles))
     ct = np.asarray(crossings_time)
     cd = np.asarray(crossings_dof)
     seg = np.asarray(segments).reshape(-1, 2)
-    fig = Figure(figsize=(10, 7.5), layout="constrained")
+    tb = None if truth_boundaries is None else np.asarray(truth_boundaries, dtype=np.float64)
+    fig = Figure(figsize=(10, 8), layout="constrained")
     axes = fig.subplots(4, 1, sharex=True)
     for j, ax in enumerate(axes):
-        for s, e in seg:
-            ax.axvspan(s, e, color="0.88", lw=0)
-        ax.plot(t, a[:, j], color=_COLORS[j], lw=1.4)
+        ax.plot(t, a[:, j], color="0.7", lw=1.0)
+        for i, (s0, e0) in enumerate(seg):
+            m = (t >= s0) & (t <= e0)
+            color = _SEGMENT_COLORS[i % len(_SEGMENT_COLORS)]
+            ax.plot(t[m], a[m, j], color=color, lw=1.8)
+            for x in (s0, e0):
+                y = float(np.interp(x, t, a[:, j]))
+                ax.plot([x], [y], "|", ms=14, mew=2.0, color="k")
         m = cd == j
         if np.any(m):
-            ax.plot(
-                ct[m], np.interp(ct[m], t, a[:, j]), "o", ms=5, mfc="white", mec="k", label="ZVC"
-            )
-        if truth_boundaries is not None:
-            for b in np.asarray(truth_boundaries):
-                ax.axvline(b, color="k", ls="--", lw=0.8, alpha=0.6)
+            ax.plot(ct[m], np.interp(ct[m], t, a[:, j]), "o", ms=4, mfc="white", mec="0.3")
+        if tb is not None:
+            _truth_ticks(ax, tb)
         ax.set_ylabel(f"{ANGLE_LABELS[j]}\n(deg)", fontsize=9)
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel("time (s)")
     handles = [
-        axes[0].plot([], [], "o", mfc="white", mec="k")[0],
-        axes[0].fill([], [], color="0.88")[0],
+        axes[0].plot([], [], color="tab:blue", lw=1.8)[0],
+        axes[0].plot([], [], "|", ms=12, mew=2.0, color="k")[0],
+        axes[0].plot([], [], "o", mfc="white", mec="0.3", ms=4)[0],
+        axes[0].plot([], [], color="0.7")[0],
     ]
-    labels = ["zero-velocity crossing", "SEG-1 segment"]
-    if truth_boundaries is not None:
-        handles.append(axes[0].plot([], [], "k--", lw=0.8)[0])
-        labels.append("true stroke boundary")
-    fig.legend(handles, labels, loc="outside lower center", ncols=3, fontsize=9)
-    fig.suptitle(title or "Segmentation at zero-velocity crossings (SEG-1)", x=0.02, ha="left")
+    labels = [
+        "SEG-1 segment (one colour each)",
+        "cut point",
+        "zero-velocity crossing",
+        "not in a segment",
+    ]
+    if tb is not None:
+        handles.append(axes[0].plot([], [], "^", color="k", alpha=0.7)[0])
+        labels.append("true stroke boundary (generator)")
+    fig.legend(handles, labels, loc="outside lower center", ncols=5, fontsize=8)
+    fig.suptitle(
+        _wrap(title or "Fig. 5: segmentation at zero-velocity crossings (SEG-1)"),
+        x=0.02,
+        ha="left",
+        fontsize=11,
+    )
     return _save(fig, path)
 
 
@@ -91,41 +133,53 @@ def plot_seg2(
     segments: ArrayLike,
     *,
     truth_boundaries: ArrayLike | None = None,
+    edge_s: float = 0.0,
     title: str = "",
 ) -> Path:
-    """Paper Fig. 6: ``z(t) = Σ θ̇ᵢ²`` in (deg/s)² (log scale) with the SEG-2 threshold c and
-    the boundaries it yields."""
+    """Paper Fig. 6: ``z(t) = Σ θ̇ᵢ²`` in (deg/s)² (log scale) with the SEG-2 threshold c in
+    the same unit (as the command line prints it) and the boundaries it yields.
+
+    ``edge_s`` seconds at each end of the trial are shaded: there the zero-phase filter's
+    edge transients dominate z(t); the y range is set from the interior only."""
     t = np.asarray(times)
     zz = np.asarray(z) * _RAD2
     c = float(threshold) * _RAD2
     seg = np.asarray(segments).reshape(-1, 2)
-    fig = Figure(figsize=(10, 4), layout="constrained")
+    fig = Figure(figsize=(10, 4.2), layout="constrained")
     ax = fig.subplots()
-    ax.semilogy(t, np.maximum(zz, c * 1e-4), color="tab:purple", lw=1.3, label="z(t) = Σ θ̇ᵢ²")
+    floor = c * 1e-4
+    ax.semilogy(t, np.maximum(zz, floor), color="tab:purple", lw=1.3, label="z(t) = Σ θ̇ᵢ²")
     ax.axhline(c, color="tab:red", lw=1.2, label=f"threshold c = {c:.4g} (deg/s)²")
+    if edge_s > 0 and t.size > 1:
+        inner = (t >= t[0] + edge_s) & (t <= t[-1] - edge_s)
+        ax.axvspan(t[0], t[0] + edge_s, color="0.85", lw=0, label="filter edge transient")
+        ax.axvspan(t[-1] - edge_s, t[-1], color="0.85", lw=0)
+        if np.any(inner):
+            top = float(np.max(zz[inner]))
+            ax.set_ylim(floor, max(top, c) * 3.0)
     bounds = np.unique(seg.ravel()) if seg.size else np.zeros(0)
     for i, b in enumerate(bounds):
         ax.axvline(b, color="tab:green", lw=1.2, label="SEG-2 boundary" if i == 0 else None)
     if truth_boundaries is not None:
-        for i, b in enumerate(np.asarray(truth_boundaries)):
-            ax.axvline(
-                b,
-                color="k",
-                ls="--",
-                lw=0.8,
-                alpha=0.6,
-                label="true stroke boundary" if i == 0 else None,
-            )
+        tb = np.asarray(truth_boundaries, dtype=np.float64)
+        _truth_ticks(ax, tb)
+        ax.plot([], [], "^", color="k", alpha=0.7, label="true stroke boundary (generator)")
     ax.set_xlabel("time (s)")
     ax.set_ylabel("z (deg/s)²")
     ax.grid(alpha=0.3, which="both")
     ax.legend(loc="lower right", fontsize=8, framealpha=0.9)
-    ax.set_title(title or "SEG-2: summed squared angular velocity and its threshold", loc="left")
+    ax.set_title(
+        _wrap(title or "Fig. 6: SEG-2, summed squared angular velocity and its threshold"),
+        loc="left",
+        fontsize=11,
+    )
     return _save(fig, path)
 
 
 def plot_eigenvalues(path: Path, eigenvalues: ArrayLike, n_components: int) -> Path:
-    """Eigenvalue spectrum of K (deg², log scale) and the cumulative variance kept."""
+    """Paper Fig. 7: the eigenvalue spectrum of K (deg², log scale) and the residual variance
+    left by the first f eigenvectors (% of the total, log scale: the projection error of
+    Table 1 relative to the total variance)."""
     lam = np.clip(np.asarray(eigenvalues, dtype=np.float64), 0.0, None) * _RAD2
     total = lam.sum()
     idx = np.arange(1, lam.size + 1)
@@ -136,21 +190,31 @@ def plot_eigenvalues(path: Path, eigenvalues: ArrayLike, n_components: int) -> P
     ax1.axvline(n_components, color="tab:red", ls="--", lw=1, label=f"f = {n_components}")
     ax1.set_xlabel("eigenvalue index")
     ax1.set_ylabel("eigenvalue (deg²)")
-    ax1.set_title("Eigenvalue spectrum", loc="left")
+    ax1.set_title("Eigenvalue spectrum", loc="left", fontsize=10)
     ax1.grid(alpha=0.3, which="both")
     ax1.legend()
-    n_show = min(lam.size, max(4 * n_components, 60))
-    frac = np.cumsum(lam) / total * 100 if total > 0 else np.zeros_like(lam)
-    ax2.plot(idx[:n_show], frac[:n_show], color="tab:green")
+    n_show = min(lam.size, max(4 * n_components, 100))
+    residual = (total - np.cumsum(lam)) / total * 100 if total > 0 else np.zeros_like(lam)
+    f_axis = idx[:n_show]
+    res = residual[:n_show]
+    keep = res > 0
+    ax2.semilogy(f_axis[keep], res[keep], color="tab:green")
     ax2.axvline(n_components, color="tab:red", ls="--", lw=1)
-    kept = frac[n_components - 1] if n_components <= frac.size else 100.0
-    ax2.axhline(kept, color="0.5", lw=0.8)
-    ax2.text(n_components + 1, kept - 6, f"{kept:.3f} % kept by f = {n_components}", fontsize=9)
+    if 1 <= n_components <= residual.size and residual[n_components - 1] > 0:
+        r = float(residual[n_components - 1])
+        ax2.plot([n_components], [r], "o", color="tab:red")
+        ax2.annotate(
+            f"{r:.3g} % left at f = {n_components}",
+            (n_components, r),
+            xytext=(8, 8),
+            textcoords="offset points",
+            fontsize=9,
+        )
     ax2.set_xlabel("number of eigenvectors f")
-    ax2.set_ylabel("variance kept (%)")
-    ax2.set_ylim(0, 101)
-    ax2.set_title("Cumulative variance", loc="left")
-    ax2.grid(alpha=0.3)
+    ax2.set_ylabel("residual variance (% of total, log)")
+    ax2.set_title("Variance not captured by the first f eigenvectors", loc="left", fontsize=10)
+    ax2.grid(alpha=0.3, which="both")
+    fig.suptitle("Fig. 7: eigenvalues of the segment covariance", x=0.02, ha="left")
     return _save(fig, path)
 
 
@@ -163,11 +227,24 @@ def _curves_grid(
     ncols: int,
     *,
     durations: ArrayLike | None = None,
+    degrees: bool = True,
 ) -> Path:
-    """Panels of 4 angle curves (degrees) each; x in % of the segment (or s if durations)."""
+    """Panels of 4 angle curves each (radians drawn in degrees unless ``degrees=False``);
+    x in % of the segment (or s if durations)."""
     n = curves.shape[0]
     nrows = int(np.ceil(n / ncols))
-    fig = Figure(figsize=(2.6 * ncols, 2.1 * nrows + 0.8), layout="constrained")
+    width, height = 2.6 * ncols, 2.1 * nrows + 1.0
+    # A fixed layout (inches converted to figure fractions): constrained layout costs
+    # seconds per figure with dozens of panels.
+    fig = Figure(figsize=(width, height))
+    fig.subplots_adjust(
+        left=0.55 / width,
+        right=1 - 0.1 / width,
+        top=1 - 0.8 / height,
+        bottom=0.75 / height,
+        wspace=0.12,
+        hspace=0.45,
+    )
     axes = np.atleast_1d(fig.subplots(nrows, ncols, sharey=True, squeeze=False)).ravel()
     x_pct = np.linspace(0, 100, curves.shape[1])
     for i, ax in enumerate(axes):
@@ -180,33 +257,42 @@ def _curves_grid(
             else np.linspace(0, float(np.asarray(durations)[i]), curves.shape[1])
         )
         for j in range(4):
-            ax.plot(x, np.degrees(curves[i, :, j]), color=_COLORS[j], lw=1.2)
+            y = np.degrees(curves[i, :, j]) if degrees else curves[i, :, j]
+            ax.plot(x, y, color=_COLORS[j], lw=1.2)
         ax.set_title(titles[i], fontsize=8)
         ax.grid(alpha=0.3)
         ax.tick_params(labelsize=7)
+        ax.xaxis.set_major_locator(MaxNLocator(3))
+        ax.yaxis.set_major_locator(MaxNLocator(4))
         if i % ncols == 0:
             ax.set_ylabel(ylabel, fontsize=8)
         if i >= n - ncols:
             ax.set_xlabel("% of segment" if durations is None else "time (s)", fontsize=8)
     handles = [axes[0].plot([], [], color=c)[0] for c in _COLORS]
-    fig.legend(handles, ANGLE_LABELS, loc="outside lower center", ncols=4, fontsize=9)
-    fig.suptitle(suptitle, x=0.02, ha="left", fontsize=11)
+    fig.legend(handles, ANGLE_LABELS, loc="lower center", ncols=4, fontsize=9, frameon=False)
+    fig.suptitle(_wrap(suptitle, int(11 * width)), x=0.02, ha="left", fontsize=11)
     return _save(fig, path)
 
 
 def plot_eigenvectors(
     path: Path, eigenvectors: ArrayLike, eigenvalues: ArrayLike, n: int = 4
 ) -> Path:
-    """Paper Fig. 8: the first ``n`` eigenvectors, each as 4 angle curves, scaled by the
-    square root of their eigenvalue (one standard deviation along the eigenvector, deg)."""
+    """Paper Fig. 8: the first ``n`` unit eigenvectors, each drawn as its 4 angle blocks
+    (100 components per angle; dimensionless, ‖e‖ = 1)."""
     e = np.asarray(eigenvectors)[:, :n]
     lam = np.clip(np.asarray(eigenvalues)[:n], 0.0, None)
     d = e.shape[0]
-    curves = (e * np.sqrt(lam)).T.reshape(n, 4, d // 4).transpose(0, 2, 1)
+    curves = e.T.reshape(n, 4, d // 4).transpose(0, 2, 1)
     share = lam / max(float(np.sum(np.clip(eigenvalues, 0, None))), 1e-300) * 100
     titles = [f"eigenvector {i + 1} ({share[i]:.1f} % of variance)" for i in range(n)]
     return _curves_grid(
-        path, curves, titles, "First eigenvectors (× √eigenvalue)", "deg", ncols=min(n, 4)
+        path,
+        curves,
+        titles,
+        "Fig. 8: the first eigenvectors (unit length; each angle's 100 components)",
+        "component",
+        ncols=min(n, 4),
+        degrees=False,
     )
 
 
@@ -226,7 +312,7 @@ def plot_primitives(
         path,
         primitive_curves,
         titles,
-        f"The {k} primitives (cluster centres reconstructed; x: % of the segment)",
+        f"Fig. 9: the {k} primitives (cluster centres reconstructed; x: % of the segment)",
         "deg",
         ncols,
     )
@@ -279,5 +365,5 @@ def plot_reconstruction(
         title += f"  —  RMS error: projection {ep:.2f}°"
         if ec is not None:
             title += f", primitive {ec:.2f}°"
-    fig.suptitle(title, x=0.02, ha="left", fontsize=11)
+    fig.suptitle(_wrap(title), x=0.02, ha="left", fontsize=11)
     return _save(fig, path)

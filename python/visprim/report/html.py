@@ -20,7 +20,17 @@ th, td { border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: right; }
 th { background: #f4f4f4; } caption { text-align: left; font-weight: bold; padding: 0.3em 0; }
 pre { background: #f7f7f7; padding: 0.8em; overflow-x: auto; font-size: 0.85em; }
 .note { font-size: 0.85em; color: #555; }
+nav.toc { background: #fafafa; border: 1px solid #e4e4e4; padding: 0.5em 1.2em; }
+nav.toc ol { margin: 0.3em 0; } .gifs img { max-width: 32%; margin-right: 1%; }
 """
+
+
+def slug(heading: str) -> str:
+    """An HTML anchor id for a heading ("Tables 1–3" → "tables-1-3")."""
+    out = []
+    for ch in heading.lower():
+        out.append(ch if ch.isascii() and ch.isalnum() else "-")
+    return "-".join(p for p in "".join(out).split("-") if p) or "section"
 
 
 @dataclass
@@ -35,6 +45,17 @@ class Page:
         self.sections.append((heading, body_html))
 
     def render(self) -> str:
+        ids: list[str] = []
+        for heading, _ in self.sections:
+            base = slug(heading)
+            ident, n = base, 2
+            while ident in ids:
+                ident, n = f"{base}-{n}", n + 1
+            ids.append(ident)
+        toc = "".join(
+            f'<li><a href="#{i}">{html.escape(h)}</a></li>'
+            for i, (h, _) in zip(ids, self.sections, strict=True)
+        )
         parts = [
             "<!DOCTYPE html>",
             '<html lang="en"><head><meta charset="utf-8">',
@@ -43,8 +64,10 @@ class Page:
             f"<h1>{html.escape(self.title)}</h1>",
             self.intro,
         ]
-        for heading, body in self.sections:
-            parts.append(f"<h2>{html.escape(heading)}</h2>")
+        if self.sections:
+            parts.append(f'<nav class="toc"><strong>Contents</strong><ol>{toc}</ol></nav>')
+        for ident, (heading, body) in zip(ids, self.sections, strict=True):
+            parts.append(f'<h2 id="{ident}">{html.escape(heading)}</h2>')
             parts.append(body)
         parts.append("</body></html>")
         return "\n".join(parts) + "\n"
@@ -60,6 +83,20 @@ def figure(src: str, caption: str) -> str:
         f'<figure><img src="{html.escape(src)}" alt="{html.escape(caption)}">'
         f"<figcaption>{html.escape(caption)}</figcaption></figure>"
     )
+
+
+def markdown_table(text: str) -> str:
+    """A simple pipe-delimited Markdown table (header, rule, rows) as an HTML table."""
+    rows = [ln.strip().strip("|").split("|") for ln in text.strip().splitlines() if "|" in ln]
+    rows = [r for r in rows if not all(set(c.strip()) <= set("-:") for c in r)]
+    if not rows:
+        return ""
+    head = "".join(f"<th>{html.escape(c.strip())}</th>" for c in rows[0])
+    body = "".join(
+        "<tr>" + "".join(f"<td>{html.escape(c.strip())}</td>" for c in r) + "</tr>"
+        for r in rows[1:]
+    )
+    return f"<table><tr>{head}</tr>{body}</table>"
 
 
 def table(t: ErrorTable, links: Sequence[tuple[str, str]] = ()) -> str:
