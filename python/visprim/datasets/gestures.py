@@ -343,7 +343,7 @@ def jittered_gesture(gesture: Gesture, rng: np.random.Generator, name: str) -> G
             return s
         t = tuple(float(v) for v in np.asarray(s.target) + rng.normal(0.0, 15.0, size=4))
         t = (t[0], max(t[1], 10.0), t[2], float(np.clip(t[3], 10.0, 140.0)))
-        return Stroke(s.kind, t, s.duration, s.bend, s.loop, s.turns)  # type: ignore[arg-type]
+        return Stroke(s.kind, t, s.duration, s.bend, s.loop, s.turns)
 
     return Gesture(
         name,
