@@ -13,7 +13,16 @@ import sys
 from collections.abc import Sequence
 
 #: Command modules of :mod:`visprim.cli`, in help order.
-COMMANDS: tuple[str, ...] = ("demo", "generate", "learn", "report", "classify", "simulate")
+COMMANDS: tuple[str, ...] = (
+    "demo",
+    "generate",
+    "learn",
+    "report",
+    "classify",
+    "simulate",
+    "imitate",
+    "export-robot",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -23,7 +32,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True)
     for name in COMMANDS:
-        importlib.import_module(f"visprim.cli.{name}").register(sub)
+        importlib.import_module(f"visprim.cli.{name.replace('-', '_')}").register(sub)
     return parser
 
 

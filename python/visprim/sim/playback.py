@@ -27,10 +27,11 @@ from visprim.sim.model import HAND_POINT, LINKS, ShapeSpec, build_adonis
 from visprim.sim.sequencer import (
     ELBOW_JOINT,
     SHOULDER_JOINT,
+    Reference,
     ViaPointSequencer,
     build_reference,
 )
-from visprim.sim.servo import JointGains, StablePD
+from visprim.sim.servo import ExplicitPD, JointGains, StablePD
 
 #: Joint speed (rad/s) beyond which a playback is declared diverged.
 DIVERGENCE_SPEED: float = 1.0e3
@@ -212,6 +213,7 @@ def play(
     render_fps: float = 25.0,
     gains: dict[str, JointGains] | None = None,
     model: tuple[dart.simulation.World, dart.dynamics.Skeleton] | None = None,
+    servo: str = "stable",
 ) -> Playback:
     """Perform a right-arm trajectory on Adonis and measure how well it was tracked.
 
@@ -236,6 +238,11 @@ def play(
     model : (world, skeleton), optional
         Reuse a model from :func:`build_adonis` (its time step must equal ``dt``); its state
         is overwritten. By default a new one is built.
+    servo : "stable" or "paper"
+        ``"stable"`` (default): stable PD following the smooth trajectory, waiting on via
+        points it has not reached (:mod:`visprim.sim.sequencer`). ``"paper"``: the method's
+        explicit PD law of eq. (1) towards one via point at a time, the next one taken as soon
+        as the arm is within ``vicinity`` of the current one (:mod:`visprim.sim.servo`).
 
     The body starts at rest except for the right arm, which starts on the trajectory's first
     sample with its velocity; the run ends when the last via point is reached or given up.
@@ -249,6 +256,8 @@ def play(
     """
     if not (np.isfinite(render_fps) and render_fps > 0):
         raise ValueError(f"render_fps must be > 0 Hz, got {render_fps}")
+    if servo not in ("stable", "paper"):
+        raise ValueError(f"servo must be 'stable' or 'paper', got {servo!r}")
     if model is None:
         world, skel = build_adonis(dt)
     else:
@@ -259,8 +268,6 @@ def play(
             )
     ref = build_reference(skel, times, angles, dt, via_spacing)
     joint_names, slices = _joint_slices(skel)
-    seq = ViaPointSequencer(ref, slices, float(vicinity), float(timeout))
-    servo = StablePD(skel, dt, gains)
     positions, velocities = ref.positions, ref.velocities
     body_names = tuple(b.getName() for b in skel.getBodyNodes())
     hand_index = body_names.index("r_hand")
@@ -277,58 +284,15 @@ def play(
     skel.setPositions(positions[0])
     skel.setVelocities(velocities[0])
 
-    n_wait_max = int(math.ceil(timeout / dt)) + 2
-    max_steps = ref.times.shape[0] + ref.via_steps.shape[0] * n_wait_max + 1
-    # Room for the trajectory plus some waiting; grown if the sequencer waits longer.
-    capacity = ref.times.shape[0] + 1000
-    rec_q = np.empty((capacity, skel.getNumDofs()))
-    rec_k = np.empty(capacity, dtype=np.int64)
-    rec_q[0] = positions[0]
-    rec_k[0] = 0
     frame_stride = max(1, int(round(1.0 / (render_fps * dt))))
-    frame_steps = [0]
-    frames = [body_transforms(skel)]
-
-    n_rec = 1
-    completion = float("nan")
-    feedforward = velocities * servo.kd  # kd θ̇d on the grid
-    kp, kp_dt = servo.kp, servo.kp * dt
-    q = skel.getPositions()
+    run = _run_stable if servo == "stable" else _run_paper
     wall0 = time.perf_counter()
-    for n in range(max_steps):
-        dq = skel.getVelocities()
-        if seq.step == seq.target_step:
-            seq.check(skel.getPositionDifferences(positions[seq.step], q), n * dt)
-            if seq.done:
-                completion = n * dt
-                break
-        moved = seq.advance()
-        k = seq.step
-        # Stable PD (servo.StablePD.forces, inlined): DART adds the implicit -kd θ̇(n+1).
-        tau = kp * skel.getPositionDifferences(positions[k], q) - kp_dt * dq
-        if moved:
-            tau += feedforward[k]
-        skel.setForces(tau)
-        world.step()
-        q = skel.getPositions()
-        if n_rec == rec_k.shape[0]:
-            rec_q = np.concatenate([rec_q, np.empty_like(rec_q)])
-            rec_k = np.concatenate([rec_k, np.empty_like(rec_k)])
-        rec_q[n_rec] = q
-        rec_k[n_rec] = k
-        n_rec += 1
-        if (n + 1) % frame_stride == 0:
-            v = skel.getVelocities()
-            if not (np.all(np.isfinite(q)) and np.abs(v).max() < DIVERGENCE_SPEED):
-                raise SimulationDiverged(
-                    f"play: the simulation diverged at t = {(n + 1) * dt:.3f} s "
-                    f"(max joint speed {np.abs(v).max():.3g} rad/s)"
-                )
-            frames.append(body_transforms(skel))
-            frame_steps.append(n + 1)
-    else:  # pragma: no cover - the timeouts bound the loop
-        completion = max_steps * dt
+    rec, seq_state = run(
+        world, skel, ref, slices, float(vicinity), float(timeout), gains, frame_stride
+    )
     wall_time = time.perf_counter() - wall0
+    rec_q, rec_k, n_rec, completion, frames, frame_steps = rec
+    reached, reach_times = seq_state
     if not np.all(np.isfinite(rec_q[:n_rec])):
         raise SimulationDiverged("play: the simulation produced NaN joint positions")
     if frame_steps[-1] != n_rec - 1:
@@ -351,9 +315,9 @@ def play(
         rest_max_error_deg=float(np.degrees(errors[:, rest].max())) if rest else 0.0,
         completion_time=completion,
         movement_duration=ref.duration,
-        reached_all=bool(seq.reached.all()),
+        reached_all=bool(reached.all()),
         via_times=ref.times[ref.via_steps],
-        via_reach_times=seq.reach_times.copy(),
+        via_reach_times=reach_times.copy(),
         frame_times=np.asarray(frame_steps, dtype=np.float64) * dt,
         frames=frames_arr,
         hand_path=hand_points(frames_arr, hand_index),
@@ -366,6 +330,147 @@ def play(
         render_fps=float(render_fps),
         wall_time=wall_time,
     )
+
+
+_Record = tuple[NDArray[np.float64], NDArray[np.int64], int, float, list, list]
+
+
+class _Recorder:
+    """Joint positions and set-point indices at every step, body transforms every
+    ``stride`` steps; checks for divergence at each stored frame."""
+
+    def __init__(self, skel: dart.dynamics.Skeleton, n_guess: int, stride: int, dt: float) -> None:
+        self.skel, self.stride, self.dt = skel, stride, dt
+        self.q = np.empty((n_guess + 1000, skel.getNumDofs()))
+        self.k = np.empty(n_guess + 1000, dtype=np.int64)
+        self.q[0] = skel.getPositions()
+        self.k[0] = 0
+        self.n = 1
+        self.frames = [body_transforms(skel)]
+        self.frame_steps = [0]
+
+    def add(self, q: NDArray[np.float64], k: int) -> None:
+        n = self.n
+        if n == self.k.shape[0]:
+            self.q = np.concatenate([self.q, np.empty_like(self.q)])
+            self.k = np.concatenate([self.k, np.empty_like(self.k)])
+        self.q[n] = q
+        self.k[n] = k
+        self.n = n + 1
+        if (n % self.stride) == 0:
+            v = self.skel.getVelocities()
+            if not (np.all(np.isfinite(q)) and np.abs(v).max() < DIVERGENCE_SPEED):
+                raise SimulationDiverged(
+                    f"play: the simulation diverged at t = {n * self.dt:.3f} s "
+                    f"(max joint speed {np.abs(v).max():.3g} rad/s)"
+                )
+            self.frames.append(body_transforms(self.skel))
+            self.frame_steps.append(n)
+
+    def result(self, completion: float) -> _Record:
+        return self.q, self.k, self.n, completion, self.frames, self.frame_steps
+
+
+def _run_stable(
+    world: dart.simulation.World,
+    skel: dart.dynamics.Skeleton,
+    ref: Reference,
+    slices: list[slice],
+    vicinity: float,
+    timeout: float,
+    gains: dict[str, JointGains] | None,
+    stride: int,
+) -> tuple[_Record, tuple[NDArray[np.bool_], NDArray[np.float64]]]:
+    """Stable PD along the smooth trajectory with the waiting via-point sequencer."""
+    dt = ref.dt
+    seq = ViaPointSequencer(ref, slices, vicinity, timeout)
+    servo = StablePD(skel, dt, gains)
+    positions = ref.positions
+    n_wait_max = int(math.ceil(timeout / dt)) + 2
+    max_steps = ref.times.shape[0] + ref.via_steps.shape[0] * n_wait_max + 1
+    rec = _Recorder(skel, ref.times.shape[0], stride, dt)
+    feedforward = ref.velocities * servo.kd  # kd θ̇d on the grid
+    kp, kp_dt = servo.kp, servo.kp * dt
+    q = skel.getPositions()
+    completion = max_steps * dt
+    for n in range(max_steps):
+        dq = skel.getVelocities()
+        if seq.step == seq.target_step:
+            seq.check(skel.getPositionDifferences(positions[seq.step], q), n * dt)
+            if seq.done:
+                completion = n * dt
+                break
+        moved = seq.advance()
+        k = seq.step
+        # Stable PD (servo.StablePD.forces, inlined): DART adds the implicit -kd θ̇(n+1).
+        tau = kp * skel.getPositionDifferences(positions[k], q) - kp_dt * dq
+        if moved:
+            tau += feedforward[k]
+        skel.setForces(tau)
+        world.step()
+        q = skel.getPositions()
+        rec.add(q, k)
+    return rec.result(completion), (seq.reached, seq.reach_times)
+
+
+def _run_paper(
+    world: dart.simulation.World,
+    skel: dart.dynamics.Skeleton,
+    ref: Reference,
+    slices: list[slice],
+    vicinity: float,
+    timeout: float,
+    gains: dict[str, JointGains] | None,
+    stride: int,
+) -> tuple[_Record, tuple[NDArray[np.bool_], NDArray[np.float64]]]:
+    """The paper's servo: explicit PD (eq. (1)) towards the current via point; the next via
+    point is taken when every joint is within ``vicinity`` of it (or after ``timeout``)."""
+    dt = ref.dt
+    servo = ExplicitPD(skel, gains)
+    via = [int(v) for v in ref.via_steps]
+    reached = np.zeros(len(via), dtype=bool)
+    reach_times = np.full(len(via), np.nan)
+    starts = np.array([s.start for s in slices], dtype=np.intp)
+    vicinity2 = vicinity * vicinity
+    n_wait = int(math.ceil(timeout / dt))
+    max_steps = len(via) * (n_wait + 2) + 1
+    rec = _Recorder(skel, ref.times.shape[0], stride, dt)
+    positions, velocities = ref.positions, ref.velocities
+    current, waited = 0, 0
+    k = via[0]
+    q = skel.getPositions()
+    completion = max_steps * dt
+    for n in range(max_steps):
+        error = skel.getPositionDifferences(positions[k], q)
+        while True:
+            near = bool(np.add.reduceat(error * error, starts).max() <= vicinity2)
+            if not near and waited < n_wait:
+                break
+            if near:
+                reached[current] = True
+                reach_times[current] = n * dt
+            current += 1
+            waited = 0
+            if current == len(via):
+                break
+            k = via[current]
+            error = skel.getPositionDifferences(positions[k], q)
+        if current == len(via):
+            completion = n * dt
+            break
+        dq = skel.getVelocities()
+        if not np.abs(dq).max() < DIVERGENCE_SPEED:  # explicit PD: check every step
+            raise SimulationDiverged(
+                f"play: the simulation diverged at t = {n * dt:.4f} s with the paper's explicit "
+                f"PD at dt = {dt:g} s (max joint speed {np.abs(dq).max():.3g} rad/s); "
+                "try a smaller time step"
+            )
+        skel.setForces(servo.forces(error, dq, velocities[k]))
+        world.step()
+        waited += 1
+        q = skel.getPositions()
+        rec.add(q, k)
+    return rec.result(completion), (reached, reach_times)
 
 
 def _shapes_by_name() -> dict[str, tuple[ShapeSpec, ...]]:

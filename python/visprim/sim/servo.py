@@ -139,3 +139,35 @@ class StablePD:
         if target_velocity is not None:
             tau += self.kd * target_velocity
         return tau
+
+
+class ExplicitPD:
+    """The method's PD law, eq. (1), evaluated explicitly:
+    ``τ = kp (θd ⊖ θ) + kd (θ̇d − θ̇)`` with the current state (N·m).
+
+    Construction removes the joints' damping and springs (the whole law is in the forces).
+    Explicit damping is stable only while ``kd Δt`` stays below about twice the smallest
+    inertia a joint moves; :mod:`benches.bench_servo` measures the largest step it tolerates.
+    """
+
+    def __init__(
+        self, skeleton: dart.dynamics.Skeleton, gains: dict[str, JointGains] | None = None
+    ) -> None:
+        self.skeleton = skeleton
+        self.kp, self.kd = gains_per_dof(skeleton, gains)
+        for i in range(skeleton.getNumDofs()):
+            dof = skeleton.getDof(i)
+            dof.setDampingCoefficient(0.0)
+            dof.setSpringStiffness(0.0)
+
+    def forces(
+        self,
+        error: NDArray[np.float64],
+        velocity: NDArray[np.float64],
+        target_velocity: NDArray[np.float64] | None,
+    ) -> NDArray[np.float64]:
+        """Joint forces (N·m): ``error`` = ``θd ⊖ θ`` (rad), velocities in rad/s."""
+        tau = self.kp * error - self.kd * velocity
+        if target_velocity is not None:
+            tau += self.kd * target_velocity
+        return tau
