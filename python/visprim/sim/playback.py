@@ -423,8 +423,9 @@ def _run_paper(
     gains: dict[str, JointGains] | None,
     stride: int,
 ) -> tuple[_Record, tuple[NDArray[np.bool_], NDArray[np.float64]]]:
-    """The paper's servo: explicit PD (eq. (1)) towards the current via point; the next via
-    point is taken when every joint is within ``vicinity`` of it (or after ``timeout``)."""
+    """The paper's servo: explicit PD (eq. (1)) towards the current via point, held still
+    (θ̇d = 0); the next via point is taken when every joint is within ``vicinity`` of it (or
+    after ``timeout``, then it counts as missed)."""
     dt = ref.dt
     servo = ExplicitPD(skel, gains)
     via = [int(v) for v in ref.via_steps]
@@ -435,7 +436,7 @@ def _run_paper(
     n_wait = int(math.ceil(timeout / dt))
     max_steps = len(via) * (n_wait + 2) + 1
     rec = _Recorder(skel, ref.times.shape[0], stride, dt)
-    positions, velocities = ref.positions, ref.velocities
+    positions = ref.positions
     current, waited = 0, 0
     k = via[0]
     q = skel.getPositions()
@@ -465,7 +466,8 @@ def _run_paper(
                 f"PD at dt = {dt:g} s (max joint speed {np.abs(dq).max():.3g} rad/s); "
                 "try a smaller time step"
             )
-        skel.setForces(servo.forces(error, dq, velocities[k]))
+        # The set point is the via point itself, held still: θ̇d = 0.
+        skel.setForces(servo.forces(error, dq, None))
         world.step()
         waited += 1
         q = skel.getPositions()
