@@ -34,7 +34,7 @@ REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
 TRAIN_SUBJECTS = ("bd", "bk", "dg")
 RECORDINGS = (
-    "hdm05_cut_amc/HDM_mm_grabHighR_001_120.amc",
+    "hdm05_cut_amc/HDM_mm_throwBasketball_010_120.amc",
     "bandai_namco_ds2/dataset-2_raise-up-right-hand_elderly_001.bvh",
     "kineticstoolkit_c3d/kinematics_tennis_serve.c3d",
 )

@@ -167,7 +167,8 @@ def _rms_deg(x: NDArray[np.float64], axis: int | None = 0) -> Any:
 
 def _geodesic(ra: NDArray[np.float64], rb: NDArray[np.float64]) -> NDArray[np.float64]:
     """Angle (rad) of the rotation between two stacks of (T, 3, 3) rotation matrices."""
-    return (Rotation.from_matrix(ra).inv() * Rotation.from_matrix(rb)).magnitude()  # type: ignore[no-any-return]
+    rel = Rotation.from_matrix(ra).inv() * Rotation.from_matrix(rb)
+    return np.asarray(rel.magnitude(), dtype=np.float64)
 
 
 def joint_space_errors(

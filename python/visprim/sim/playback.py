@@ -26,6 +26,8 @@ from scipy.spatial.transform import Rotation
 from visprim.sim.model import HAND_POINT, LINKS, ShapeSpec, build_adonis
 from visprim.sim.sequencer import (
     ELBOW_JOINT,
+    LEFT_ELBOW_JOINT,
+    LEFT_SHOULDER_JOINT,
     SHOULDER_JOINT,
     Reference,
     ViaPointSequencer,
@@ -56,7 +58,7 @@ class Playback:
     joint_errors_deg : (N, n_joints) array, degrees
         Error of every joint with DOF (order ``joint_names``), see the module docstring.
     rms_error_deg, max_error_deg : float
-        RMS and maximum error of the right shoulder and elbow over all steps.
+        RMS and maximum error of the driven shoulders and elbows over all steps.
     rest_max_error_deg : float
         Largest error of any other joint (held at rest).
     completion_time : float, s
@@ -215,14 +217,15 @@ def play(
     model: tuple[dart.simulation.World, dart.dynamics.Skeleton] | None = None,
     servo: str = "stable",
 ) -> Playback:
-    """Perform a right-arm trajectory on Adonis and measure how well it was tracked.
+    """Perform a right-arm (or two-arm) trajectory on Adonis and measure how well it was tracked.
 
     Parameters
     ----------
     times : (T,) array, seconds
         Strictly increasing sample times (any origin).
-    angles : (T, 4) array, radians
-        The method's angles (γ, β, α, elbow) of the right arm (:mod:`visprim.arm`).
+    angles : (T, 4) or (T, 8) array, radians
+        The method's angles (γ, β, α, elbow) of the right arm (:mod:`visprim.arm`), then for
+        (T, 8) those of the left arm (mirror convention, :func:`.sequencer.angles_to_positions`).
     vicinity : float, radians
         A via point counts as reached when every joint is within this of it (default 3°).
     timeout : float, seconds
@@ -302,7 +305,10 @@ def play(
     q_actual = rec_q[:n_rec].copy()
     q_target = positions[rec_k[:n_rec]]
     errors = joint_errors(skel, q_target, q_actual)
-    arm = [joint_names.index(SHOULDER_JOINT), joint_names.index(ELBOW_JOINT)]
+    driven = [SHOULDER_JOINT, ELBOW_JOINT]
+    if np.shape(angles)[1] == 8:
+        driven += [LEFT_SHOULDER_JOINT, LEFT_ELBOW_JOINT]
+    arm = [joint_names.index(j) for j in driven]
     rest = [i for i in range(len(joint_names)) if i not in arm]
     frames_arr = np.stack(frames)
     return Playback(

@@ -28,6 +28,7 @@ import os
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Literal
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
@@ -45,14 +46,14 @@ BALL_AXES: tuple[tuple[str, tuple[float, float, float]], ...] = (
 SPLIT_LINK_MASS = 1e-6
 SPLIT_LINK_INERTIA = 1e-9
 #: The matching scipy Euler sequence (upper case: intrinsic).
-BALL_EULER = "XZY"
+BALL_EULER: Literal["XZY"] = "XZY"
 
 
 def _f(x: float) -> str:
     return repr(float(x)) if x != 0 else "0"
 
 
-def _v(xs: Sequence[float]) -> str:
+def _v(xs: Sequence[float] | np.ndarray) -> str:
     return " ".join(_f(x) for x in xs)
 
 

@@ -38,7 +38,7 @@ def check_video_path(path: str | Path) -> Path:
         )
     if ext == ".mp4":
         try:
-            import imageio_ffmpeg  # noqa: F401
+            import imageio_ffmpeg  # type: ignore[import-untyped]  # noqa: F401
         except ImportError:
             raise ImportError(
                 f"{out}: writing .mp4 needs imageio-ffmpeg: pip install 'visprim[video]' "
@@ -68,7 +68,7 @@ def _gif(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
 
 
 def _mp4(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
-    import imageio_ffmpeg
+    import imageio_ffmpeg  # type: ignore[import-untyped]
 
     writer = None
     n = 0
