@@ -127,7 +127,7 @@ class Imitation:
             f"{' '.join(str(int(k)) for k in self.primitives)}",
             f"  rebuild: {SOURCE_LABELS[self.source]}",
             "  rebuild vs human RMS (deg): "
-            + ", ".join(f"{a} {rb[a]:.2f}" for a in ANGLE_NAMES)
+            + ", ".join(f"{a} {rb[a]:.2f}" for a in channel_names(self.human.shape[1]))
             + f"; overall {rb['overall']:.2f}",
         ]
         cov = m["coverage"]
@@ -171,14 +171,31 @@ def _geodesic(ra: NDArray[np.float64], rb: NDArray[np.float64]) -> NDArray[np.fl
     return np.asarray(rel.magnitude(), dtype=np.float64)
 
 
+def channel_names(n_channels: int) -> tuple[str, ...]:
+    """Names of the angle columns: γ, β, α, elbow of the right arm (4), or ``right_*`` then
+    ``left_*`` (8)."""
+    if n_channels == 4:
+        return ANGLE_NAMES
+    if n_channels == 8:
+        return tuple(f"{side}_{a}" for side in ("right", "left") for a in ANGLE_NAMES)
+    raise ValueError(f"expected 4 (one arm) or 8 (two arms) angle columns, got {n_channels}")
+
+
 def joint_space_errors(
     a: NDArray[np.float64], b: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Shoulder geodesic angle and elbow difference (rad), each (T,), between two (T, 4)
-    angle arrays (see the module docstring)."""
-    return _geodesic(shoulder_rotation_body(a), shoulder_rotation_body(b)), np.abs(
-        a[:, 3] - b[:, 3]
-    )
+    """Shoulder geodesic angles and elbow differences (rad) between two (T, 4) or (T, 8)
+    angle arrays (see the module docstring), each (T * n_arms,): all arms stacked."""
+    shoulders, elbows = [], []
+    for c in range(0, a.shape[1], 4):
+        # The left arm's mirror convention is a conjugation: it leaves geodesic angles alone.
+        shoulders.append(
+            _geodesic(
+                shoulder_rotation_body(a[:, c : c + 3]), shoulder_rotation_body(b[:, c : c + 3])
+            )
+        )
+        elbows.append(np.abs(a[:, c + 3] - b[:, c + 3]))
+    return np.concatenate(shoulders), np.concatenate(elbows)
 
 
 def _joint_rms(shoulder: NDArray[np.float64], elbow: NDArray[np.float64]) -> dict[str, float]:
@@ -190,7 +207,8 @@ def _joint_rms(shoulder: NDArray[np.float64], elbow: NDArray[np.float64]) -> dic
 
 
 def _angle_rms(diff: NDArray[np.float64]) -> dict[str, float]:
-    out = {name: float(v) for name, v in zip(ANGLE_NAMES, _rms_deg(diff), strict=True)}
+    names = channel_names(diff.shape[1])
+    out = {name: float(v) for name, v in zip(names, _rms_deg(diff), strict=True)}
     out["overall"] = float(_rms_deg(diff, axis=None))
     return out
 
@@ -200,19 +218,30 @@ def _same_branch(
 ) -> NDArray[np.float64]:
     """γ and α of ``angles`` moved by whole turns to lie nearest ``reference``."""
     out = angles.copy()
-    for c in (0, 2):
-        out[:, c] += 2 * np.pi * np.round((reference[:, c] - angles[:, c]) / (2 * np.pi))
+    for c in range(0, angles.shape[1], 4):
+        for k in (c, c + 2):
+            out[:, k] += 2 * np.pi * np.round((reference[:, k] - angles[:, k]) / (2 * np.pi))
     return out
 
 
 def human_arm_points(trial: Trial) -> NDArray[np.float64]:
-    """The recorded arm as (T, 4, 3) points in metres — shoulder, elbow, wrist, finger — in
-    body axes (+x forward, +y left, +z up) with the shoulder at the origin."""
+    """The recorded arm(s) as (T, 4 n_arms, 3) points in metres — shoulder, elbow, wrist,
+    finger of the right arm, then of the left for a two-arm trial — in body axes (+x
+    forward, +y left, +z up), each arm with its own shoulder at the origin."""
     from visprim.ik import implied_joint_centres
 
-    joints = trial.joints if trial.joints is not None else implied_joint_centres(trial.markers)
-    points = np.concatenate([joints, trial.markers[:, 3:4]], axis=1)
-    rel = points - points[:, :1]
+    n_arms = trial.markers.shape[1] // 4
+    out = []
+    for arm in range(n_arms):
+        markers = trial.markers[:, 4 * arm : 4 * arm + 4]
+        joints = trial.joints
+        if joints is not None and joints.shape[1] >= 3 * (arm + 1):
+            centres = joints[:, 3 * arm : 3 * arm + 3]
+        else:
+            centres = implied_joint_centres(markers)
+        points = np.concatenate([centres, markers[:, 3:4]], axis=1)
+        out.append(points - points[:, :1])
+    rel = np.concatenate(out, axis=1)
     if trial.body_frame is not None:
         rel = np.einsum("tji,tpj->tpi", trial.body_frame, rel)  # v_B = Fᵀ v
     return rel
@@ -389,7 +418,8 @@ def _play(
         playback.q_actual.shape[0] - 1,
     )
     q = playback.q_actual[steps]
-    out[played] = _same_branch(positions_to_angles(adonis_model[1], q), human[played])
+    n_arms = human.shape[1] // 4
+    out[played] = _same_branch(positions_to_angles(adonis_model[1], q, n_arms), human[played])
     return playback, out
 
 
@@ -449,8 +479,8 @@ def imitation_csv(imitation: Imitation) -> str:
     w = csv.writer(buf, lineterminator="\n")
     cols = ["time_s", "segment", "primitive"]
     for who in ("human", "rebuild", "adonis"):
-        cols += [f"{who}_{a}_rad" for a in ANGLE_NAMES]
-    cols += [f"rebuild_{a}_rad_s" for a in ANGLE_NAMES]
+        cols += [f"{who}_{a}_rad" for a in channel_names(imitation.human.shape[1])]
+    cols += [f"rebuild_{a}_rad_s" for a in channel_names(imitation.human.shape[1])]
     w.writerow(cols)
     adonis = (
         imitation.adonis_angles

@@ -136,14 +136,15 @@ def arm_trajectory(
     velocities: ArrayLike,
     description: str = "",
 ) -> JointTrajectory:
-    """The URDF joint trajectory of right-arm angles (T, 4) rad with their rates (T, 4)
-    rad/s at ``times`` (s; the first becomes time 0). Every other joint stays at rest."""
+    """The URDF joint trajectory of arm angles (T, 4) rad (right arm; (T, 8): both, see
+    :func:`visprim.sim.sequencer.angles_to_positions`) with their rates (rad/s) at ``times``
+    (s; the first becomes time 0). Every other joint stays at rest."""
     t = np.asarray(times, dtype=np.float64)
     a = np.asarray(angles, dtype=np.float64)
     v = np.asarray(velocities, dtype=np.float64)
-    if t.ndim != 1 or a.shape != (t.shape[0], 4) or v.shape != a.shape:
+    if t.ndim != 1 or a.shape not in ((t.shape[0], 4), (t.shape[0], 8)) or v.shape != a.shape:
         raise ValueError(
-            f"arm_trajectory: need times (T,), angles and velocities (T, 4); got {t.shape}, "
+            f"arm_trajectory: need times (T,), angles and velocities (T, 4 or 8); got {t.shape}, "
             f"{a.shape}, {v.shape}"
         )
     skel = _skeleton()

@@ -338,6 +338,24 @@ def play(
     )
 
 
+def _driven_ball_joints(
+    skel: dart.dynamics.Skeleton, ref: Reference, slices: list[slice]
+) -> list[tuple[slice, dart.dynamics.Joint]]:
+    """Ball joints whose target ever leaves rest, with their DOF slices.
+
+    The error ``θd ⊖ θ`` of every other joint is a plain difference: revolute joints
+    subtract, and a ball joint aimed at rest has ``log(R(θ)ᵀ) = −θ`` exactly in DART's
+    exponential coordinates. Only the driven ball joints need DART's geodesic difference,
+    which keeps the per-step cost down.
+    """
+    names, _ = _joint_slices(skel)
+    out = []
+    for name, sl in zip(names, slices, strict=True):
+        if sl.stop - sl.start == 3 and np.any(ref.positions[:, sl] != 0.0):
+            out.append((sl, skel.getJoint(name)))
+    return out
+
+
 _Record = tuple[NDArray[np.float64], NDArray[np.int64], int, float, list, list]
 
 
@@ -397,6 +415,7 @@ def _run_stable(
     rec = _Recorder(skel, ref.times.shape[0], stride, dt)
     feedforward = ref.velocities * servo.kd  # kd θ̇d on the grid
     kp, kp_dt = servo.kp, servo.kp * dt
+    driven = _driven_ball_joints(skel, ref, slices)
     q = skel.getPositions()
     completion = max_steps * dt
     for n in range(max_steps):
@@ -408,8 +427,12 @@ def _run_stable(
                 break
         moved = seq.advance()
         k = seq.step
+        target = positions[k]
+        error = target - q
+        for sl, joint in driven:
+            error[sl] = joint.getPositionDifferences(target[sl], q[sl])
         # Stable PD (servo.StablePD.forces, inlined): DART adds the implicit -kd θ̇(n+1).
-        tau = kp * skel.getPositionDifferences(positions[k], q) - kp_dt * dq
+        tau = kp * error - kp_dt * dq
         if moved:
             tau += feedforward[k]
         skel.setForces(tau)
@@ -447,8 +470,16 @@ def _run_paper(
     k = via[0]
     q = skel.getPositions()
     completion = max_steps * dt
+    driven = _driven_ball_joints(skel, ref, slices)
+
+    def position_error(target: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
+        error = target - q
+        for sl, joint in driven:
+            error[sl] = joint.getPositionDifferences(target[sl], q[sl])
+        return error
+
     for n in range(max_steps):
-        error = skel.getPositionDifferences(positions[k], q)
+        error = position_error(positions[k], q)
         while True:
             near = bool(np.add.reduceat(error * error, starts).max() <= vicinity2)
             if not near and waited < n_wait:
@@ -461,7 +492,7 @@ def _run_paper(
             if current == len(via):
                 break
             k = via[current]
-            error = skel.getPositionDifferences(positions[k], q)
+            error = position_error(positions[k], q)
         if current == len(via):
             completion = n * dt
             break

@@ -17,29 +17,34 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from PIL import Image
+from PIL import Image, ImageDraw
 
 from visprim.sim.model import LINKS, SHOULDER_OFFSET, WAIST_HEIGHT
 from visprim.sim.render import SUPERSAMPLE, Camera, Painter, PlaybackDrawer, _Label
 from visprim.sim.video import write_video
 
-#: Where the human's shoulder is drawn: Adonis's right shoulder at rest (world, metres).
+#: Where the human's shoulders are drawn: Adonis's right (then left) shoulder at rest
+#: (world, metres).
 SHOULDER_WORLD = np.array(
-    [SHOULDER_OFFSET[0], -SHOULDER_OFFSET[1], WAIST_HEIGHT + SHOULDER_OFFSET[2]]
+    [
+        [SHOULDER_OFFSET[0], -SHOULDER_OFFSET[1], WAIST_HEIGHT + SHOULDER_OFFSET[2]],
+        [SHOULDER_OFFSET[0], SHOULDER_OFFSET[1], WAIST_HEIGHT + SHOULDER_OFFSET[2]],
+    ]
 )
-_ARM_BODIES = ("r_upper_arm", "r_forearm", "r_hand")
+_ARM_BODIES = ("r_upper_arm", "r_forearm", "r_hand", "l_upper_arm", "l_forearm", "l_hand")
 _HUMAN_COLORS = ((200, 60, 30), (220, 110, 30), (235, 160, 40))
 
 
-def _rest_transforms() -> tuple[NDArray[np.float64], list[Any]]:
-    """World transforms (n, 4, 4) and shapes of Adonis's bodies at rest, right arm excluded."""
+def _rest_transforms(n_arms: int) -> tuple[NDArray[np.float64], list[Any]]:
+    """World transforms (n, 4, 4) and shapes of Adonis's bodies at rest, without the arms
+    drawn from the recording (the right one, or both)."""
     tfs, shapes = [], []
     offsets: dict[str, NDArray[np.float64]] = {}
     for link in LINKS:
         base = offsets.get(link.parent, np.zeros(3)) if link.parent else np.zeros(3)
         origin = base + np.asarray(link.joint_offset)
         offsets[link.name] = origin
-        if link.name in _ARM_BODIES:
+        if link.name in _ARM_BODIES[: 3 * n_arms]:
             continue
         tf = np.eye(4)
         tf[:3, 3] = origin
@@ -84,15 +89,21 @@ class SideBySide:
         )
         self.painter = Painter(cam, size)
         p = self.painter
-        # Background of the human panel: Adonis at rest without the right arm, faint.
-        tfs, shapes = _rest_transforms()
+        # Background of the human panel: Adonis at rest without the recorded arm(s), faint.
+        n_arms = imitation.human.shape[1] // 4
+        tfs, shapes = _rest_transforms(n_arms)
         self.background, draw = p.canvas()
         p.draw_items(draw, p.body_items(tfs, shapes, tint=(0.75, 0.93)))
         trial = imitation.trial
         self.human_times = trial.times - trial.times[0]
-        points = human_arm_points(trial) + SHOULDER_WORLD
-        self.human_2d = p.project(points)  # (T, 4, 2)
-        self.finger_runs = p.dash_runs(self.human_2d[:, 3], 6.0 * SUPERSAMPLE)
+        points = human_arm_points(trial) + np.repeat(SHOULDER_WORLD[:n_arms], 4, axis=0)
+        self.human_2d = p.project(points)  # (T, 4 n_arms, 2)
+        self.n_arms = n_arms
+        self.finger_runs = [
+            run
+            for a in range(n_arms)
+            for run in p.dash_runs(self.human_2d[:, 4 * a + 3], 6.0 * SUPERSAMPLE)
+        ]
         w, h = size
         rb = m["rebuild_vs_human_rms_deg"]["overall"]
         cov = m["coverage"]
@@ -115,20 +126,19 @@ class SideBySide:
         """The human panel at video time ``tau`` seconds."""
         p = self.painter
         image = self.background.copy()
-        from PIL import ImageDraw
-
         draw = ImageDraw.Draw(image)
         i = int(np.clip(np.searchsorted(self.human_times, tau, side="right") - 1, 0, None))
         for run in self.finger_runs:
             draw.line(run, fill=(150, 150, 210), width=SUPERSAMPLE)
-        p.polyline(draw, self.human_2d[: i + 1, 3], (230, 102, 13), 1.6 * SUPERSAMPLE)
-        pts = self.human_2d[i]
         s = SUPERSAMPLE
-        for a, b, col in zip(pts[:-1], pts[1:], _HUMAN_COLORS, strict=True):
-            draw.line((*a, *b), fill=col, width=int(7 * s))
         r = 4.5 * s
-        for x, y in pts:
-            draw.ellipse((x - r, y - r, x + r, y + r), fill=(60, 60, 60))
+        for a in range(self.n_arms):
+            p.polyline(draw, self.human_2d[: i + 1, 4 * a + 3], (230, 102, 13), 1.6 * s)
+            pts = self.human_2d[i, 4 * a : 4 * a + 4]
+            for u, v, col in zip(pts[:-1], pts[1:], _HUMAN_COLORS, strict=True):
+                draw.line((*u, *v), fill=col, width=int(7 * s))
+            for x, y in pts:
+                draw.ellipse((x - r, y - r, x + r, y + r), fill=(60, 60, 60))
         out = p.finish(image)
         for label in self.labels:
             label.paste(out)
