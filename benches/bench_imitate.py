@@ -15,7 +15,8 @@ projection``), both played on Adonis with the stable PD at 1 ms.
 Speed (median of repeated runs, [min, max] beside it): ``play`` of each rebuild without
 rendering as a real-time factor (movement seconds / wall seconds), with bare
 ``World.step()`` of the same model as the reference measured in the same run; drawing one
-Adonis frame and one side-by-side video frame (480×480 panels), ms per frame.
+Adonis frame and one side-by-side video frame (480×480 panels), ms per frame, beside the
+matplotlib renderer visprim used before (``benches/_render_matplotlib.py``) in the same run.
 
 Run: ``PYTHONPATH=python .venv/bin/python benches/bench_imitate.py [--quick]``.
 """
@@ -30,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
 TRAIN_SUBJECTS = ("bd", "bk", "dg")
@@ -152,10 +154,14 @@ def main() -> None:
         print(f"| {name} | {dur:.2f} s | {spread(factors, '{:.1f}')}x |")
     print(f"| reference: bare World.step(), 2 s | 2.00 s | {spread(bare, '{:.1f}')}x |")
 
+    from _render_matplotlib import Camera as MplCamera
+    from _render_matplotlib import _frame_drawer, _to_image
+
     res = results[0]
     drawer = PlaybackDrawer(res.playback, Camera(), (480, 480), "bench")
     view = SideBySide(res, (480, 480))
-    single, double = [], []
+    fig, mpl_draw = _frame_drawer(res.playback, MplCamera(), (480, 480), 100.0, "bench")
+    single, double, mpl = [], [], []
     n_frames = res.playback.frames.shape[0]
     for _ in range(repeat):
         t0 = time.perf_counter()
@@ -166,10 +172,18 @@ def main() -> None:
         for i in range(view.n_frames):
             view.frame(i)
         double.append((time.perf_counter() - t0) / view.n_frames * 1e3)
+        t0 = time.perf_counter()
+        for i in range(n_frames):
+            mpl_draw(i)
+            _to_image(fig)
+        mpl.append((time.perf_counter() - t0) / n_frames * 1e3)
     print(f"\n| rendering ({res.name}) | frames | ms per frame |")
     print("|---|---:|---|")
-    print(f"| Adonis panel 480x480 (PIL) | {n_frames} | {spread(single)} |")
-    print(f"| side-by-side frame 960x480 (PIL) | {view.n_frames} | {spread(double)} |")
+    print(f"| Adonis panel 480x480, PIL (visprim.sim.render) | {n_frames} | {spread(single)} |")
+    print(f"| side-by-side frame 960x480, PIL | {view.n_frames} | {spread(double)} |")
+    print(f"| reference: Adonis panel 480x480, matplotlib Agg | {n_frames} | {spread(mpl)} |")
+    ratios = [m / s for m, s in zip(mpl, single, strict=True)]
+    print(f"matplotlib / PIL per Adonis frame: {spread(ratios)}x")
 
 
 if __name__ == "__main__":

@@ -418,15 +418,23 @@ def _run_stable(
     driven = _driven_ball_joints(skel, ref, slices)
     q = skel.getPositions()
     completion = max_steps * dt
+    # The sequencer's state machine (ViaPointSequencer.check / advance) with the set point
+    # index kept in a local between via points: the loop runs a thousand times a second.
+    k, target_step = 0, seq.target_step
     for n in range(max_steps):
         dq = skel.getVelocities()
-        if seq.step == seq.target_step:
-            seq.check(skel.getPositionDifferences(positions[seq.step], q), n * dt)
+        if k == target_step:
+            seq.step = k
+            seq.check(skel.getPositionDifferences(positions[k], q), n * dt)
             if seq.done:
                 completion = n * dt
                 break
-        moved = seq.advance()
-        k = seq.step
+            target_step = seq.target_step
+        moved = k < target_step
+        if moved:
+            k += 1
+        else:
+            seq.wait += dt
         target = positions[k]
         error = target - q
         for sl, joint in driven:
@@ -439,6 +447,7 @@ def _run_stable(
         world.step()
         q = skel.getPositions()
         rec.add(q, k)
+    seq.step = k
     return rec.result(completion), (seq.reached, seq.reach_times)
 
 
