@@ -138,3 +138,15 @@ def test_bad_options_are_refused(data) -> None:
         imitate(model, trial, source="cluster")  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="servo"):
         imitate(model, trial, servo="pid")  # type: ignore[arg-type]
+
+
+def test_a_failing_video_leaves_no_file(result, tmp_path, monkeypatch) -> None:
+    import visprim.sim.sidebyside as sidebyside
+
+    def broken(*args, **kwargs):
+        raise RuntimeError("encoder failed")
+
+    monkeypatch.setattr(sidebyside, "render_imitation", broken)
+    with pytest.raises(RuntimeError, match="encoder failed"):
+        write_imitation(result, tmp_path / "out", video="v.gif")
+    assert list((tmp_path / "out").iterdir()) == []

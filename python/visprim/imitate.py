@@ -511,7 +511,7 @@ def write_imitation(
     size: tuple[int, int] = (480, 480),
     extra: dict[str, Any] | None = None,
 ) -> dict[str, Path]:
-    """Write the results of :func:`imitate` into ``out_dir`` (created), each file atomically:
+    """Write the results of :func:`imitate` into ``out_dir`` (created):
 
     * ``imitation.json`` — :attr:`Imitation.metrics` (+ ``extra``) and the file list;
     * ``imitation.csv`` — the trajectories (:func:`imitation_csv`);
@@ -519,32 +519,39 @@ def write_imitation(
       (:mod:`visprim.sim.export`);
     * the video ``video`` (.gif or .mp4; None for none): human beside Adonis.
 
-    The video's format is checked before anything is written. Returns the paths by kind.
+    Nothing is written half-way: the video's format is checked first, every file is written
+    into a hidden staging folder inside ``out_dir`` and moved into place (:func:`os.replace`)
+    only once all of them exist; on failure the staging folder is removed. Returns the paths
+    by kind.
     """
     import json
-
-    from visprim.sim.urdf import write_text_atomic
+    import os
+    import shutil
+    import tempfile
 
     out = Path(out_dir)
-    video_path = None
     if video is not None:
         from visprim.sim.video import check_video_path
 
-        video_path = check_video_path(out / video)
+        check_video_path(out / video)
     out.mkdir(parents=True, exist_ok=True)
-    paths: dict[str, Path] = {}
-    paths["csv"] = out / "imitation.csv"
-    write_text_atomic(paths["csv"], imitation_csv(imitation))
-    paths["trajectory_json"], paths["trajectory_csv"] = trajectory_of(imitation).write(
-        out / "trajectory"
-    )
-    if video_path is not None and imitation.playback is not None:
-        from visprim.sim.sidebyside import render_imitation
+    stage = Path(tempfile.mkdtemp(prefix=".imitation-", dir=out))
+    try:
+        names: dict[str, str] = {"csv": "imitation.csv"}
+        (stage / names["csv"]).write_text(imitation_csv(imitation), encoding="utf-8")
+        js, cs = trajectory_of(imitation).write(stage / "trajectory")
+        names["trajectory_json"], names["trajectory_csv"] = js.name, cs.name
+        if video is not None and imitation.playback is not None:
+            from visprim.sim.sidebyside import render_imitation
 
-        paths["video"] = render_imitation(imitation, video_path, size=size)
-    doc = dict(imitation.metrics)
-    doc.update(extra or {})
-    doc["files"] = {k: p.name for k, p in paths.items()}
-    paths["json"] = out / "imitation.json"
-    write_text_atomic(paths["json"], json.dumps(doc, indent=1) + "\n")
-    return paths
+            names["video"] = render_imitation(imitation, stage / video, size=size).name
+        doc = dict(imitation.metrics)
+        doc.update(extra or {})
+        doc["files"] = dict(names)
+        names["json"] = "imitation.json"
+        (stage / names["json"]).write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+        for name in names.values():
+            os.replace(stage / name, out / name)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    return {kind: out / name for kind, name in names.items()}

@@ -28,6 +28,7 @@ def run(args: argparse.Namespace) -> int:
     from visprim import PrimitiveModel
     from visprim.imitate import imitate, write_imitation
     from visprim.io import ReadError, read
+    from visprim.progress import stages
     from visprim.sim.playback import SimulationDiverged
 
     dt = args.dt if args.dt is not None else (0.001 if args.servo == "stable" else 0.0001)
@@ -38,17 +39,20 @@ def run(args: argparse.Namespace) -> int:
             options["skeleton"] = args.skeleton
         if args.rate is not None:
             options["rate"] = args.rate
-        trial = read(args.recording, **options)
-        print(f"imitating {args.recording} ({trial.duration:.2f} s) on Adonis ...", file=sys.stderr)
-        result = imitate(model, trial, source=args.source, servo=args.servo, dt=dt)
+        with stages(3, "imitate") as progress:
+            progress.step("reading")
+            trial = read(args.recording, **options)
+            progress.step(f"segmenting, rebuilding, playing {trial.duration:.1f} s on Adonis")
+            result = imitate(model, trial, source=args.source, servo=args.servo, dt=dt)
+            progress.step("writing files" + (" and the video" if video else ""))
+            paths = write_imitation(
+                result,
+                args.out,
+                video=video,
+                size=(args.size, args.size),
+                extra={"model": str(Path(args.model).resolve())},
+            )
         print(result.summary())
-        paths = write_imitation(
-            result,
-            args.out,
-            video=video,
-            size=(args.size, args.size),
-            extra={"model": str(Path(args.model).resolve())},
-        )
     except (ReadError, ValueError, OSError, SimulationDiverged) as exc:
         print(f"visprim imitate: {exc}", file=sys.stderr)
         return 2
