@@ -4,7 +4,8 @@ Movements: ``--n`` (default 3) chains of minimum-jerk right-arm strokes between 
 postures (0.4-1.2 s each, ``--seconds`` long). Both servos use the default gains
 (:data:`visprim.sim.servo.GAINS`), via points every 0.1 s and a 3° vicinity:
 
-* ``stable``: stable PD following the smooth trajectory, waiting on unreached via points;
+* ``stable``: stable PD following the smooth trajectory, waiting on unreached via points,
+  with (default) and without the inverse dynamics of the trajectory as feedforward;
 * ``paper``: eq. (1) evaluated explicitly, aimed at one via point at a time, the next taken
   when every joint is within the vicinity (the paper's switching).
 
@@ -43,12 +44,20 @@ from visprim.sim.sequencer import ELBOW_JOINT, SHOULDER_JOINT, build_reference  
 GRID = (2e-5, 5e-5, 1e-4, 1.5e-4, 2e-4, 3e-4, 5e-4, 1e-3, 2e-3, 5e-3, 1e-2, 2e-2)
 
 
-def run_one(times, angles, servo: str, dt: float) -> dict | None:
+def run_one(times, angles, servo: str, dt: float, feedforward: bool = True) -> dict | None:
     """Metrics of one playback, or None if it diverged."""
     world, skel = build_adonis(dt)
     try:
         t0 = time.perf_counter()
-        pb = play(times, angles, servo=servo, dt=dt, model=(world, skel), render_fps=5.0)
+        pb = play(
+            times,
+            angles,
+            servo=servo,
+            dt=dt,
+            model=(world, skel),
+            render_fps=5.0,
+            feedforward=feedforward,
+        )
         wall = time.perf_counter() - t0
     except SimulationDiverged:
         return None
@@ -84,15 +93,22 @@ def main() -> None:
     print(f"{n} movements of {seconds:.1f} s (minimum-jerk strokes, seeds 0..{n - 1})\n")
 
     rows = []
-    for servo, dt in (("stable", 1e-3), ("paper", 1e-3), ("paper", 1e-4)):
-        res = [run_one(t, a, servo, dt) for t, a in moves]
+    variants = (
+        ("stable", 1e-3, True),
+        ("stable", 1e-3, False),
+        ("paper", 1e-3, False),
+        ("paper", 1e-4, False),
+    )
+    for servo, dt, ff in variants:
+        res = [run_one(t, a, servo, dt, ff) for t, a in moves]
         ok = [r for r in res if r is not None]
+        label = f"{servo} PD" + (" + inverse-dynamics feedforward" if ff else "")
         if len(ok) < len(res):
-            rows.append((servo, dt, "diverged", "-", "-", "-"))
+            rows.append((label, dt, "diverged", "-", "-", "-"))
             continue
         rows.append(
             (
-                servo,
+                label,
                 dt,
                 spread([r["rms_deg"] for r in ok]),
                 spread([r["ratio"] for r in ok]),

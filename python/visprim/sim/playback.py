@@ -1,14 +1,21 @@
-"""Play a 4-angle arm trajectory on Adonis: via-point sequencer + stable-PD servo + metrics.
+"""Play an arm trajectory on Adonis: via-point sequencer + servo + metrics.
 
 :func:`play` is the one entry point: it builds (or reuses) the model, maps the trajectory onto
-the right arm (:mod:`visprim.sim.sequencer`), runs the servo (:mod:`visprim.sim.servo`) at
-the world's time step with gravity and no collision, and returns a :class:`Playback` with the
-tracking metrics and the body transforms at a render rate for :mod:`visprim.sim.render`.
+the right arm, or both (:mod:`visprim.sim.sequencer`), runs the servo
+(:mod:`visprim.sim.servo`) at the world's time step with gravity and no collision, and returns
+a :class:`Playback` with the tracking metrics and the body transforms at a render rate for
+:mod:`visprim.sim.render`.
+
+Servos: the stable PD (default) follows the smooth trajectory, with the inverse dynamics of
+the trajectory as feedforward (:func:`inverse_dynamics_feedforward`; the PD only corrects
+what the model of the body gets wrong, here nothing but the discretisation, so it tracks to
+a fraction of a degree) and waits on via points it has not reached; ``servo="paper"`` is the
+method's explicit PD towards one via point at a time.
 
 Joint error: for a ball joint the angle of the rotation from target to actual (geodesic,
 independent of the Euler-angle parametrisation, so finite at the Z-Y-Z singularity), for a
 revolute joint the absolute angle difference. The tracking metrics are taken over the two
-joints the angles drive (right shoulder, right elbow) at every time step, against the set
+joints the angles drive (shoulder and elbow of each driven arm) at every time step, against the set
 point the servo was following (the target trajectory including any waits on via points).
 """
 
@@ -17,6 +24,8 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from functools import partial
+from typing import Any
 
 import dartpy as dart
 import numpy as np
@@ -216,6 +225,7 @@ def play(
     gains: dict[str, JointGains] | None = None,
     model: tuple[dart.simulation.World, dart.dynamics.Skeleton] | None = None,
     servo: str = "stable",
+    feedforward: bool = True,
 ) -> Playback:
     """Perform a right-arm (or two-arm) trajectory on Adonis and measure how well it was tracked.
 
@@ -288,8 +298,10 @@ def play(
     skel.setVelocities(velocities[0])
 
     frame_stride = max(1, int(round(1.0 / (render_fps * dt))))
-    run = _run_stable if servo == "stable" else _run_paper
+    run: Any = _run_paper
     wall0 = time.perf_counter()
+    if servo == "stable":
+        run = partial(_run_stable, feedforward=feedforward)
     rec, seq_state = run(
         world, skel, ref, slices, float(vicinity), float(timeout), gains, frame_stride
     )
@@ -356,6 +368,45 @@ def _driven_ball_joints(
     return out
 
 
+def inverse_dynamics_feedforward(
+    skel: dart.dynamics.Skeleton, ref: Reference, stride: int = 10
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Joint torques (N·m) that perform the reference exactly, ``M(θd) θ̈d + C(θd, θ̇d) +
+    g(θd)``, and those that hold it still, ``g(θd)``, on the control grid (each (K + 1,
+    n_dofs)).
+
+    Inverse dynamics of the *reference* (not of the measured state, so the feedforward adds
+    no feedback loop), evaluated every ``stride`` grid steps and interpolated linearly in
+    between; θ̈d is the finite difference of θ̇d. The skeleton's state is restored.
+    """
+    saved = (skel.getPositions(), skel.getVelocities())
+    n = ref.positions.shape[0]
+    coarse = np.unique(np.append(np.arange(0, n, stride), n - 1))
+    acc = np.gradient(ref.velocities, ref.dt, axis=0) if n > 1 else np.zeros_like(ref.velocities)
+    zero = np.zeros(skel.getNumDofs())
+    move = np.empty((coarse.size, zero.size))
+    hold = np.empty_like(move)
+    for i, k in enumerate(coarse):
+        skel.setPositions(ref.positions[k])
+        skel.setVelocities(ref.velocities[k])
+        skel.setAccelerations(acc[k])
+        skel.computeInverseDynamics(False, False, False)
+        move[i] = skel.getForces()
+        skel.setVelocities(zero)
+        skel.setAccelerations(zero)
+        skel.computeInverseDynamics(False, False, False)
+        hold[i] = skel.getForces()
+    skel.setPositions(saved[0])
+    skel.setVelocities(saved[1])
+    skel.resetCommands()
+    grid = np.arange(n)
+
+    def interp(values: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.stack([np.interp(grid, coarse, values[:, j]) for j in range(values.shape[1])], 1)
+
+    return interp(move), interp(hold)
+
+
 _Record = tuple[NDArray[np.float64], NDArray[np.int64], int, float, list, list]
 
 
@@ -404,6 +455,7 @@ def _run_stable(
     timeout: float,
     gains: dict[str, JointGains] | None,
     stride: int,
+    feedforward: bool = True,
 ) -> tuple[_Record, tuple[NDArray[np.bool_], NDArray[np.float64]]]:
     """Stable PD along the smooth trajectory with the waiting via-point sequencer."""
     dt = ref.dt
@@ -413,7 +465,13 @@ def _run_stable(
     n_wait_max = int(math.ceil(timeout / dt)) + 2
     max_steps = ref.times.shape[0] + ref.via_steps.shape[0] * n_wait_max + 1
     rec = _Recorder(skel, ref.times.shape[0], stride, dt)
-    feedforward = ref.velocities * servo.kd  # kd θ̇d on the grid
+    # Feedforward on the grid: kd θ̇d (the damping's share) plus the inverse dynamics of the
+    # reference while the set point moves; gravity alone while it waits on a via point.
+    if feedforward:
+        move, hold = inverse_dynamics_feedforward(skel, ref)
+    else:
+        move, hold = np.zeros_like(ref.velocities), np.zeros_like(ref.velocities)
+    ff = ref.velocities * servo.kd + move
     kp, kp_dt = servo.kp, servo.kp * dt
     driven = _driven_ball_joints(skel, ref, slices)
     q = skel.getPositions()
@@ -441,8 +499,7 @@ def _run_stable(
             error[sl] = joint.getPositionDifferences(target[sl], q[sl])
         # Stable PD (servo.StablePD.forces, inlined): DART adds the implicit -kd θ̇(n+1).
         tau = kp * error - kp_dt * dq
-        if moved:
-            tau += feedforward[k]
+        tau += ff[k] if moved else hold[k]
         skel.setForces(tau)
         world.step()
         q = skel.getPositions()

@@ -16,6 +16,10 @@ stable-PD solve with the full mass matrix), and the explicit remainder
 diverges at Δt = 1 ms on the hands (the wrist's damping ``kd Δt`` exceeds twice the hand's
 inertia about its long axis, 3.4e-4 kg·m²); stable PD does not.
 
+:func:`visprim.sim.playback.play` adds the inverse dynamics of the trajectory as feedforward
+(the torques that perform it exactly), so the PD only corrects the residual; the law itself
+is unchanged.
+
 For a ball joint the position error ``θd − θ`` is the rotation vector of ``R(θ)ᵀ R(θd)``
 (DART's ``getPositionDifferences``: the geodesic error in the child frame, the frame of the
 joint's angular velocity), not a difference of coordinates.
