@@ -464,7 +464,8 @@ def trajectory_of(imitation: Imitation) -> Any:
         imitation.times[inside],
         imitation.rebuild_angles[inside],
         imitation.rebuild_velocities[inside],
-        f"{imitation.name}: {SOURCE_LABELS[imitation.source]}",
+        f"{imitation.name}: {SOURCE_LABELS[imitation.source]}; time 0 = "
+        f"{imitation.rebuild.start:.3f} s on the recording's clock (start of the first segment)",
     )
 
 
