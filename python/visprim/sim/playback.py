@@ -177,7 +177,10 @@ def joint_errors(
     _, slices = _joint_slices(skeleton)
     out = np.empty((qt.shape[0], len(slices)))
     for i, s in enumerate(slices):
-        if s.stop - s.start == 3:
+        if s.stop - s.start == 3 and not np.any(qt[:, s]):
+            # Target at rest: the error is the rotation of the actual pose itself.
+            out[:, i] = Rotation.from_rotvec(qa[:, s]).magnitude()
+        elif s.stop - s.start == 3:
             rel = Rotation.from_rotvec(qt[:, s]).inv() * Rotation.from_rotvec(qa[:, s])
             out[:, i] = rel.magnitude()
         else:
@@ -411,39 +414,40 @@ _Record = tuple[NDArray[np.float64], NDArray[np.int64], int, float, list, list]
 
 
 class _Recorder:
-    """Joint positions and set-point indices at every step, body transforms every
-    ``stride`` steps; checks for divergence at each stored frame."""
+    """Joint positions and set-point indices at every step (the loops write ``q`` and ``k``
+    directly, row ``n``), body transforms every ``stride`` steps (:meth:`frame`, which also
+    checks for divergence)."""
 
     def __init__(self, skel: dart.dynamics.Skeleton, n_guess: int, stride: int, dt: float) -> None:
         self.skel, self.stride, self.dt = skel, stride, dt
+        self.bodies = list(skel.getBodyNodes())
         self.q = np.empty((n_guess + 1000, skel.getNumDofs()))
         self.k = np.empty(n_guess + 1000, dtype=np.int64)
         self.q[0] = skel.getPositions()
         self.k[0] = 0
         self.n = 1
-        self.frames = [body_transforms(skel)]
+        self.frames = [self.transforms()]
         self.frame_steps = [0]
 
-    def add(self, q: NDArray[np.float64], k: int) -> None:
-        n = self.n
-        if n == self.k.shape[0]:
-            self.q = np.concatenate([self.q, np.empty_like(self.q)])
-            self.k = np.concatenate([self.k, np.empty_like(self.k)])
-        self.q[n] = q
-        self.k[n] = k
-        self.n = n + 1
-        if (n % self.stride) == 0:
-            v = self.skel.getVelocities()
-            if not (np.all(np.isfinite(q)) and np.abs(v).max() < DIVERGENCE_SPEED):
-                raise SimulationDiverged(
-                    f"play: the simulation diverged at t = {n * self.dt:.3f} s "
-                    f"(max joint speed {np.abs(v).max():.3g} rad/s)"
-                )
-            self.frames.append(body_transforms(self.skel))
-            self.frame_steps.append(n)
+    def transforms(self) -> NDArray[np.float64]:
+        return np.array([b.getWorldTransform().matrix() for b in self.bodies])
 
-    def result(self, completion: float) -> _Record:
-        return self.q, self.k, self.n, completion, self.frames, self.frame_steps
+    def grow(self) -> None:
+        self.q = np.concatenate([self.q, np.empty_like(self.q)])
+        self.k = np.concatenate([self.k, np.empty_like(self.k)])
+
+    def frame(self, n: int, q: NDArray[np.float64]) -> None:
+        v = self.skel.getVelocities()
+        if not (np.all(np.isfinite(q)) and np.abs(v).max() < DIVERGENCE_SPEED):
+            raise SimulationDiverged(
+                f"play: the simulation diverged at t = {n * self.dt:.3f} s "
+                f"(max joint speed {np.abs(v).max():.3g} rad/s)"
+            )
+        self.frames.append(self.transforms())
+        self.frame_steps.append(n)
+
+    def result(self, n_rec: int, completion: float) -> _Record:
+        return self.q, self.k, n_rec, completion, self.frames, self.frame_steps
 
 
 def _run_stable(
@@ -479,6 +483,7 @@ def _run_stable(
     # The sequencer's state machine (ViaPointSequencer.check / advance) with the set point
     # index kept in a local between via points: the loop runs a thousand times a second.
     k, target_step = 0, seq.target_step
+    rec_q, rec_k, cap, n_rec = rec.q, rec.k, rec.k.shape[0], 1
     for n in range(max_steps):
         dq = skel.getVelocities()
         if k == target_step:
@@ -503,9 +508,16 @@ def _run_stable(
         skel.setForces(tau)
         world.step()
         q = skel.getPositions()
-        rec.add(q, k)
+        if n + 1 == cap:
+            rec.grow()
+            rec_q, rec_k, cap = rec.q, rec.k, rec.k.shape[0]
+        rec_q[n + 1] = q
+        rec_k[n + 1] = k
+        if (n + 1) % stride == 0:
+            rec.frame(n + 1, q)
+        n_rec = n + 2
     seq.step = k
-    return rec.result(completion), (seq.reached, seq.reach_times)
+    return rec.result(n_rec, completion), (seq.reached, seq.reach_times)
 
 
 def _run_paper(
@@ -532,7 +544,7 @@ def _run_paper(
     max_steps = len(via) * (n_wait + 2) + 1
     rec = _Recorder(skel, ref.times.shape[0], stride, dt)
     positions = ref.positions
-    current, waited = 0, 0
+    current, waited, n_rec = 0, 0, 1
     k = via[0]
     q = skel.getPositions()
     completion = max_steps * dt
@@ -574,8 +586,14 @@ def _run_paper(
         world.step()
         waited += 1
         q = skel.getPositions()
-        rec.add(q, k)
-    return rec.result(completion), (reached, reach_times)
+        if n + 1 == rec.k.shape[0]:
+            rec.grow()
+        rec.q[n + 1] = q
+        rec.k[n + 1] = k
+        if (n + 1) % stride == 0:
+            rec.frame(n + 1, q)
+        n_rec = n + 2
+    return rec.result(n_rec, completion), (reached, reach_times)
 
 
 def _shapes_by_name() -> dict[str, tuple[ShapeSpec, ...]]:
