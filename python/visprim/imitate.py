@@ -11,11 +11,14 @@
    (:meth:`~PrimitiveModel.transform`, :meth:`~PrimitiveModel.assign`);
 4. the movement is rebuilt from the primitives' **centres** (``source="primitives"``), each
    curve stretched to its segment's duration with the segment's whole-turn offsets of γ and α
-   added back, and the segments joined with no step in angle or velocity
-   (:class:`visprim.sim.joining.JoinedTrajectory`). ``source="projection"`` rebuilds each
+   added back, and the segments joined with no step in value or velocity
+   (:class:`visprim.sim.joining.JoinedTrajectory`), in the model's description
+   (:mod:`visprim.features`: Z-Y-Z angles, or unit bone directions then turned into angles by
+   inverse kinematics, :class:`Rebuild`). ``source="projection"`` rebuilds each
    segment from its own f-D projection instead: a near-copy of the human, not an imitation
    through primitives, reported as such;
-5. the rebuild is played on Adonis (:func:`visprim.sim.play`, stable PD or the paper's servo).
+5. the rebuild is played on Adonis (:func:`visprim.sim.play`, stable PD or the paper's servo;
+   both arms for a two-arm model, whose recordings are read with ``arm="both"``).
 
 What the human did is the low-passed IK angles of the recording (what the method sees).
 Errors (:class:`Imitation.metrics`, degrees) are taken at the recording's frames that a
@@ -63,7 +66,7 @@ DEFAULT_PERIOD_S = 0.034
 #: Spacing (s) of the rebuild samples handed to the simulation.
 PLAY_SAMPLE_S = 0.005
 
-__all__ = ["Imitation", "imitate", "model_frame_period", "human_arm_points"]
+__all__ = ["Imitation", "Rebuild", "human_arm_points", "imitate", "model_frame_period"]
 
 
 def model_frame_period(model: Any) -> float | None:
@@ -88,7 +91,7 @@ class Imitation:
     primitives : (N,) int — nearest primitive of each segment.
     distances : (N,) rad — distance of each segment's projection to that primitive's centre.
     segment_of_frame : (F,) int — segment index of each frame, -1 where none covers it.
-    rebuild : JoinedTrajectory — the joined rebuild (call it with times).
+    rebuild : Rebuild — the joined rebuild (call it with times for angles, velocities).
     rebuild_angles, rebuild_velocities : (F, 4) — the rebuild at the frames inside
         ``[segments[0, 0], segments[-1, 1]]`` (NaN outside).
     adonis_angles : (F, 4) or None — Adonis's arm angles at the same clock (NaN outside the
@@ -106,7 +109,7 @@ class Imitation:
     primitives: NDArray[np.int64]
     distances: NDArray[np.float64]
     segment_of_frame: NDArray[np.int64]
-    rebuild: JoinedTrajectory
+    rebuild: Rebuild
     rebuild_angles: NDArray[np.float64]
     rebuild_velocities: NDArray[np.float64]
     adonis_angles: NDArray[np.float64] | None
@@ -262,12 +265,62 @@ def _uncovered(t0: float, t1: float, segments: NDArray[np.float64]) -> list[tupl
 # ---------------------------------------------------------------------------- imitate
 
 
-def _read(recording: Trial | str | Path) -> Trial:
+class Rebuild:
+    """The joined rebuild as arm angles.
+
+    ``channels`` is the :class:`JoinedTrajectory` of the segment curves in the model's
+    description (:mod:`visprim.features`: the Z-Y-Z angles themselves, or unit bone
+    directions, turned into angles by inverse kinematics). Calling it with times (s) gives
+    ``(angles (k, 4 n_arms) rad, velocities rad/s)``: for angles, the joined trajectory and
+    its analytic derivative; for directions, inverse kinematics of the joined directions and
+    the time derivative of the angles (finite differences over the given times). ``turns``
+    (4 n_arms,) rad is added to the angles (whole turns of γ and α, see :func:`imitate`).
+    """
+
+    def __init__(self, channels: JoinedTrajectory, features: str = "zyz") -> None:
+        self.channels = channels
+        self.features = features
+        self.turns: NDArray[np.float64] | None = None
+
+    @property
+    def start(self) -> float:
+        return self.channels.start
+
+    @property
+    def end(self) -> float:
+        return self.channels.end
+
+    def __call__(self, times: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        t = np.atleast_1d(np.asarray(times, dtype=np.float64))
+        values, rates = self.channels(t)
+        if self.features == "zyz":
+            angles, velocities = values, rates
+        else:
+            from visprim.features import to_angles
+
+            angles = to_angles(values, self.features, t)
+            velocities = np.gradient(angles, t, axis=0) if t.size > 1 else np.zeros_like(angles)
+        if self.turns is not None:
+            angles = angles + self.turns
+        return angles, velocities
+
+
+def _turns(angles: NDArray[np.float64], reference: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Whole turns (per column, rad) that bring γ and α of ``angles`` closest to
+    ``reference`` on average (zero for β and the elbow)."""
+    out = np.zeros(angles.shape[1])
+    for c in range(0, angles.shape[1], 4):
+        for k in (c, c + 2):
+            out[k] = 2 * np.pi * np.round(np.mean(reference[:, k] - angles[:, k]) / (2 * np.pi))
+    return out
+
+
+def _read(recording: Trial | str | Path, arms: tuple[str, ...]) -> Trial:
     if isinstance(recording, Trial):
         return recording
     from visprim.io import read
 
-    return read(str(recording))
+    return read(str(recording), arm="both" if len(arms) == 2 else "right")
 
 
 def imitate(
@@ -303,7 +356,8 @@ def imitate(
         raise ValueError(f"source must be 'primitives' or 'projection', got {source!r}")
     if servo not in ("stable", "paper"):
         raise ValueError(f"servo must be 'stable' or 'paper', got {servo!r}")
-    trial = _read(recording)
+    arms = tuple(getattr(model, "arms_", ("right",)))
+    trial = _read(recording, arms)
     target = model_frame_period(model) if period == "model" else period
     if target is not None and abs(trial.frame_period - float(target)) > 1e-9 * float(target):
         from visprim.io import resample_trial
@@ -322,16 +376,27 @@ def imitate(
     projections = model.transform(sv.vectors)
     labels, distances = model.assign(projections)
     coords = model.cluster_centers_[labels] if source == "primitives" else projections
+    # Curves in the model's description (angles or bone directions), on the trial's turns.
     curves = sv.to_trial_angles(coords @ model.components_.T + model.mean_)
     bounds = np.stack([sv.starts, sv.ends], axis=1)
-    rebuild = JoinedTrajectory(list(curves), bounds)
+    rebuild = Rebuild(
+        JoinedTrajectory(list(curves), bounds), str(getattr(model, "features", "zyz"))
+    )
 
     times = corpus.times_all
     human = corpus.angles_all
     inside = (times >= rebuild.start - 1e-9) & (times <= rebuild.end + 1e-9)
+    # One evaluation on the frames and a fine grid together (inverse kinematics unwraps γ and
+    # α along it), put on the human's whole turns.
+    n_fine = max(2, int(np.ceil((rebuild.end - rebuild.start) / PLAY_SAMPLE_S)) + 1)
+    grid = np.union1d(times[inside], np.linspace(rebuild.start, rebuild.end, n_fine))
+    grid_a, grid_v = rebuild(grid)
+    rows = np.searchsorted(grid, times[inside])
+    rebuild.turns = _turns(grid_a[rows], human[inside])
+    grid_a = grid_a + rebuild.turns
     rb_a = np.full_like(human, np.nan)
     rb_v = np.full_like(human, np.nan)
-    rb_a[inside], rb_v[inside] = rebuild(times[inside])
+    rb_a[inside], rb_v[inside] = grid_a[rows], grid_v[rows]
     seg_of = np.full(times.shape[0], -1, dtype=np.int64)
     for j, (s, e) in enumerate(bounds):
         last = j == bounds.shape[0] - 1
@@ -370,7 +435,7 @@ def imitate(
     playback = None
     adonis = None
     if play:
-        playback, adonis = _play(rebuild, times, human, servo, dt, render_fps)
+        playback, adonis = _play(rebuild.start, grid, grid_a, times, human, servo, dt, render_fps)
         metrics["adonis"] = _adonis_metrics(playback, adonis, rb_a, human, cov, servo, dt)
         metrics["adonis"]["time_ratio_full"] = playback.completion_time / duration
     return Imitation(
@@ -393,7 +458,9 @@ def imitate(
 
 
 def _play(
-    rebuild: JoinedTrajectory,
+    start: float,
+    grid: NDArray[np.float64],
+    angles: NDArray[np.float64],
     times: NDArray[np.float64],
     human: NDArray[np.float64],
     servo: Servo,
@@ -404,16 +471,13 @@ def _play(
     from visprim.sim.playback import play
     from visprim.sim.sequencer import positions_to_angles
 
-    n = max(2, int(np.ceil((rebuild.end - rebuild.start) / PLAY_SAMPLE_S)) + 1)
-    grid = np.linspace(rebuild.start, rebuild.end, n)
-    angles, _ = rebuild(grid)
     adonis_model = build_adonis(dt)
     playback = play(grid, angles, dt=dt, render_fps=render_fps, servo=servo, model=adonis_model)
-    # Adonis at the recording's frames, same clock (simulation time 0 = rebuild.start).
+    # Adonis at the recording's frames, same clock (simulation time 0 = start).
     out = np.full_like(human, np.nan)
-    played = (times >= rebuild.start - 1e-9) & (times <= rebuild.start + playback.times[-1] + 1e-9)
+    played = (times >= start - 1e-9) & (times <= start + playback.times[-1] + 1e-9)
     steps = np.clip(
-        np.rint((times[played] - rebuild.start) / dt).astype(np.int64),
+        np.rint((times[played] - start) / dt).astype(np.int64),
         0,
         playback.q_actual.shape[0] - 1,
     )
