@@ -1,11 +1,10 @@
 """Imitation of real recordings through primitives, and the speed of playback and rendering.
 
-Model (leave one subject out): ``PrimitiveModel(n_clusters=30)`` with default settings,
-learned from the HDM05 recordings of ``../shared/data/hdm05_cut_amc`` of subjects bd, bk and
-dg, resampled to 34 ms like ``visprim learn``; recordings of 40 frames or fewer (1.4 s; the
-zero-phase filter needs more than 33) are left out. Subject mm is held out. The model is
-written to ``--model`` (default /tmp/visprim_bench_imitate.npz) so that the same figures can
-be reproduced with ``visprim imitate``.
+Model (leave one subject out): ``visprim learn`` with its defaults and ``--clusters 30`` on
+the HDM05 recordings of ``../shared/data/hdm05_cut_amc`` of subjects bd, bk and dg (the
+command is printed); subject mm is held out. The model is written to ``--model`` (default
+/tmp/visprim_bench_imitate.npz) so that the same figures can be reproduced with
+``visprim imitate``.
 
 Recordings imitated (three kinds): an HDM05 .amc of the held-out subject, a Bandai-Namco
 .bvh and a C3D marker recording. For each, the primitive rebuild and, as the simple
@@ -49,20 +48,16 @@ def spread(values: list[float], fmt: str = "{:.2f}") -> str:
 
 
 def learn(data: Path, out: Path) -> object:
+    """``visprim learn`` on the training subjects' HDM05 files (the command line itself)."""
     from visprim import PrimitiveModel
-    from visprim.io import read_many
+    from visprim.cli.main import main as cli
 
-    files = sorted(
-        str(p) for s in TRAIN_SUBJECTS for p in (data / "hdm05_cut_amc").glob(f"HDM_{s}_*.amc")
-    )
-    trials = [t for t in read_many(files, resample=0.034) if t.n_frames > 40]
-    print(f"learning from {len(trials)} HDM05 recordings of subjects {', '.join(TRAIN_SUBJECTS)}")
-    model = PrimitiveModel(n_clusters=30).fit(
-        trials, source={"kind": "files", "paths": files, "resample": 0.034}
-    )
-    model.save(out)
-    print(f"  {model.n_training_segments_} segments, k = 30 -> {out}")
-    return model
+    globs = [str(data / "hdm05_cut_amc" / f"HDM_{s}_*.amc") for s in TRAIN_SUBJECTS]
+    argv = ["learn", *globs, "--out", str(out), "--clusters", "30"]
+    print("visprim " + " ".join(argv), flush=True)
+    if cli(argv) != 0:
+        sys.exit("bench_imitate: visprim learn failed")
+    return PrimitiveModel.load(out)
 
 
 def main() -> None:
