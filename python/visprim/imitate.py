@@ -24,7 +24,8 @@ What the human did is the low-passed IK angles of the recording (what the method
 Errors (:class:`Imitation.metrics`, degrees) are taken at the recording's frames that a
 segment covers:
 
-* rebuild vs human, RMS per angle (γ, β, α, elbow) and over the four;
+* rebuild vs human, RMS per angle (γ, β, α, elbow; γ and α modulo whole turns) and over the
+  four;
 * in joint space, for rebuild vs human, Adonis vs human and Adonis vs rebuild: the shoulder's
   geodesic angle (the rotation between two shoulder orientations, free of the Z-Y-Z
   singularity) and the elbow's difference, RMS of each and over both. Adonis is compared at
@@ -210,6 +211,12 @@ def _joint_rms(shoulder: NDArray[np.float64], elbow: NDArray[np.float64]) -> dic
 
 
 def _angle_rms(diff: NDArray[np.float64]) -> dict[str, float]:
+    """RMS per angle column (degrees) of differences (rad); γ and α, angles about an
+    unbounded axis, are compared modulo whole turns (wrapped into (−π, π])."""
+    diff = diff.copy()
+    for c in range(0, diff.shape[1], 4):
+        for k in (c, c + 2):
+            diff[:, k] = np.angle(np.exp(1j * diff[:, k]))
     names = channel_names(diff.shape[1])
     out = {name: float(v) for name, v in zip(names, _rms_deg(diff), strict=True)}
     out["overall"] = float(_rms_deg(diff, axis=None))
