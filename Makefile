@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 export VIRTUAL_ENV := $(abspath $(VENV))
 
-.PHONY: install demo test bench lint format clean
+.PHONY: install demo test bench lint docs format clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -14,7 +14,7 @@ install: $(PY)  ## build the Rust extension (release) and install visprim + dev 
 	$(VENV)/bin/maturin develop --release -q -E dev
 
 demo: install   ## generate the default experiment, learn primitives, write the report to out/demo
-	$(VENV)/bin/visprim demo --out out/demo
+	$(VENV)/bin/visprim demo --out out/demo --force
 
 test: install   ## cargo test + pytest
 	cargo test --release -q
@@ -24,15 +24,19 @@ bench: install  ## criterion benches + visprim vs numpy/scipy/scikit-learn in on
 	cargo bench --bench signal --bench linalg
 	$(PY) benches/compare.py
 
-lint: install   ## ruff, cargo fmt --check, clippy
+lint: install   ## ruff, mypy (config in pyproject.toml), cargo fmt --check, clippy
 	$(VENV)/bin/ruff check python tests benches
 	$(VENV)/bin/ruff format --check python tests benches
+	$(VENV)/bin/mypy
 	cargo fmt --all -- --check
 	cargo clippy --all-targets --features python -- -D warnings
+
+docs: install   ## API reference from the docstrings (Sphinx + numpydoc), warnings are errors
+	$(PY) -m sphinx -W --keep-going -q -b html docs docs/_build/html
 
 format: $(PY)
 	$(VENV)/bin/ruff format python tests benches
 	cargo fmt --all
 
 clean:
-	rm -rf $(VENV) target out
+	rm -rf $(VENV) target out docs/_build

@@ -1,6 +1,6 @@
 """Benchmark section: covariance + eigh and k-means, visprim against numpy / scikit-learn.
 
-Workloads of issue 2: a ``100,000 x 400`` covariance + eigendecomposition (references:
+Workloads: a ``100,000 x 400`` covariance + eigendecomposition (references:
 ``numpy.cov`` + ``numpy.linalg.eigh``, and scikit-learn ``PCA(svd_solver="covariance_eigh")``
 which does the same work), and k-means on ``100,000 x 30`` float64 rows for k in
 {10, 30, 100, 170} (reference: scikit-learn ``KMeans(algorithm="lloyd")`` with the same

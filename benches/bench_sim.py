@@ -1,4 +1,4 @@
-"""Adonis in DART: real-time factor of the controlled simulation (issue 6 target: >= 20x).
+"""Adonis in DART: real-time factor of the controlled simulation (target: >= 20x).
 
 Workload: a deterministic chain of minimum-jerk right-arm strokes (seeded random postures,
 0.4-1.2 s each, 10 s in all; 2 s with ``--quick``) played by :func:`visprim.sim.play` at

@@ -1,4 +1,5 @@
-"""The pipeline subcommands of the CLI: demo, learn, report, classify."""
+"""The pipeline subcommands of the CLI: demo, learn, report, classify (the happy paths;
+failures in test_cli_errors.py, outputs in test_cli_outputs.py)."""
 
 from __future__ import annotations
 
@@ -51,22 +52,34 @@ def test_learn_output(tmp_path, capsys):
     assert f"model written to {path}" in out
 
 
-def test_learn_bad_parameter_is_a_clear_error(tmp_path):
-    with pytest.raises(SystemExit, match="n_clusters=100000 exceeds"):
-        main(
-            [
-                "learn",
-                "--out",
-                str(tmp_path / "m.npz"),
-                "--subjects",
-                "1",
-                "--stimuli",
-                "3",
-                "--clusters",
-                "100000",
-            ]
-        )
+def test_learn_bad_parameter_is_a_clear_error(tmp_path, capsys):
+    code = main(
+        [
+            "learn",
+            "--out",
+            str(tmp_path / "m.npz"),
+            "--subjects",
+            "1",
+            "--stimuli",
+            "3",
+            "--clusters",
+            "100000",
+        ]
+    )
+    assert code == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("visprim learn: error: --clusters 100000 exceeds")
+    assert "lower --clusters" in err[-1]
     assert not (tmp_path / "m.npz").exists()
+
+
+def test_version(capsys):
+    import visprim
+
+    with pytest.raises(SystemExit) as info:
+        main(["--version"])
+    assert info.value.code == 0
+    assert capsys.readouterr().out.strip() == f"visprim {visprim.__version__}"
 
 
 def test_report_from_the_recorded_source(learned, tmp_path, capsys):
@@ -123,6 +136,9 @@ def test_demo_small(tmp_path, capsys):
     assert printed.count("**Table 1") == 2  # SEG-1 and SEG-2 models
     assert "Classification at k = " in printed
     assert f"Report:  {out / 'index.html'}" in printed
+    assert f"saved {out / 'model_seg2.npz'}" in printed  # final paths, not the temporary ones
     for name in ("index.html", "model_seg1.npz", "model_seg2.npz", "primitives.png", "table1.md"):
         assert (out / name).exists(), name
-    assert "visprim demo output" in (out / "index.html").read_text(encoding="utf-8")
+    page = (out / "index.html").read_text(encoding="utf-8")
+    assert "visprim demo output" in page and ".visprim-tmp" not in page
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["demo"]  # no temporary left

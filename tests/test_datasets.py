@@ -1,4 +1,4 @@
-"""The generated imitation experiment (issue 3): structure, determinism, geometry, truth."""
+"""The generated imitation experiment: structure, determinism, geometry, truth."""
 
 from __future__ import annotations
 

@@ -46,7 +46,7 @@ def clean_experiment() -> list[Trial]:
 
 
 def test_generated_noise_free_accuracy(clean_experiment: list[Trial]) -> None:
-    """Issue 4 target: <= 0.5° RMS against the true angles away from β ≈ 0."""
+    """Target: <= 0.5° RMS against the true angles away from β ≈ 0."""
     est = arm_angles_corpus(clean_experiment)
     diffs, betas = [], []
     for trial, angles in zip(clean_experiment, est, strict=True):

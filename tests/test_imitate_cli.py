@@ -33,7 +33,7 @@ def test_imitate_writes_metrics_trajectories_and_video(files, tmp_path, capsys) 
     assert "imitation.gif" in names
     doc = json.loads((out / "imitation.json").read_text())
     assert doc["adonis"]["servo"] == "stable" and doc["model"].endswith("model.npz")
-    assert not [n for n in names if n.startswith(".")]  # no temporary files left
+    assert not [n for n in names if n.startswith(".") and "tmp" in n]  # no temporary files
 
 
 def test_imitate_projection_is_labelled(files, tmp_path, capsys) -> None:
@@ -56,9 +56,10 @@ def test_imitate_refuses_bad_input_in_one_line(files, tmp_path, capsys) -> None:
     assert "not found" in capsys.readouterr().err
     bad = tmp_path / "bad.bvh"
     bad.write_text("HIERARCHY\nnonsense\n")
-    assert main(["imitate", str(model), str(bad), "--out", str(out)]) == 2
+    assert main(["imitate", str(model), str(bad), "--out", str(out)]) == 1
     err = capsys.readouterr().err
-    assert err.startswith("visprim imitate:") and "bad.bvh" in err
+    assert err.startswith("visprim imitate: error:") and "bad.bvh" in err
+    assert err.count("\n") == 1
     assert not out.exists()
 
 
@@ -74,3 +75,6 @@ def test_export_robot_writes_urdf_and_primitive_trajectories(files, tmp_path, ca
     assert len(doc["joint_names"]) == 20 and doc["points"][0]["time_from_start"]["sec"] == 0
     assert main(["export-robot", "--out", str(tmp_path / "a.xml")]) == 2
     assert ".urdf" in capsys.readouterr().err
+    assert main(argv) == 2  # outputs exist
+    assert "--force" in capsys.readouterr().err
+    assert main([*argv, "--force"]) == 0

@@ -1,4 +1,4 @@
-"""Issue 4 segmentation targets on the default generated experiment (11 subjects × 20
+"""Segmentation targets on the default generated experiment (11 subjects × 20
 stimuli, seed 0, noise and skin offsets on): IK → low-pass (order 10, cutoff 0.25) → SEG-1 /
 SEG-2, scored against ``truth.boundaries`` at ±100 ms."""
 

@@ -47,8 +47,9 @@ def test_primitive_trajectory_spans_the_duration() -> None:
         sim_cli.primitive_trajectory(FakeModel(), 3)
 
 
-def test_demo_primitives_writes_gifs_and_metrics(tmp_path, capsys) -> None:
-    paths = sim_cli.demo_primitives(FakeModel(), tmp_path / "demo", n=2)
+def test_demo_primitives_writes_gifs_and_metrics(tmp_path, caplog) -> None:
+    with caplog.at_level("INFO", logger="visprim"):
+        paths = sim_cli.demo_primitives(FakeModel(), tmp_path / "demo", n=2)
     # The two most used primitives (labels_): 2 and 1.
     assert [p.name for p in paths] == ["adonis_primitive_01.gif", "adonis_primitive_02.gif"]
     for p in paths:
@@ -61,8 +62,7 @@ def test_demo_primitives_writes_gifs_and_metrics(tmp_path, capsys) -> None:
         assert float(r["rms_error_deg"]) <= 5.0
         assert float(r["time_ratio"]) <= 1.5
         assert r["via_reached"] == r["via_points"]
-    out = capsys.readouterr().out
-    assert "all 3 primitives" in out and "adonis_primitive_02.gif" in out
+    assert "all 3 primitives" in caplog.text and "adonis_primitive_02.gif" in caplog.text
 
 
 def test_simulate_command_with_stand_in_model(tmp_path, monkeypatch, capsys) -> None:
@@ -74,7 +74,8 @@ def test_simulate_command_with_stand_in_model(tmp_path, monkeypatch, capsys) -> 
     with Image.open(out) as im:
         assert im.n_frames == 16  # 0.6 s at 25 Hz, t = 0 included
     assert "primitive 2: RMS" in capsys.readouterr().out
-    assert main(["simulate", str(model_file), "--primitive", "7", "--out", str(out)]) == 2
+    argv = ["simulate", str(model_file), "--primitive", "7", "--out", str(out), "--force"]
+    assert main(argv) == 2
     assert "out of range" in capsys.readouterr().err
     assert main(["simulate", str(model_file), "--out", str(out)]) == 2
     assert main(["simulate", str(tmp_path / "missing.npz"), "--primitive", "0"]) == 2
@@ -83,7 +84,7 @@ def test_simulate_command_with_stand_in_model(tmp_path, monkeypatch, capsys) -> 
 
 def test_simulate_learned_model_primitives_and_movement(tmp_path, capsys) -> None:
     """End to end on a small generated corpus: learn, save, then play every primitive
-    (issue 6 targets) and render one primitive and one reconstructed movement."""
+    (the simulation targets) and render one primitive and one reconstructed movement."""
     datasets = pytest.importorskip("visprim.datasets")
     from visprim import PrimitiveModel
     from visprim.markers_csv import write_marker_csv

@@ -1,4 +1,4 @@
-"""Adonis's structure, mass properties and kinematics (issue 6)."""
+"""Adonis's structure, mass properties and kinematics."""
 
 from __future__ import annotations
 

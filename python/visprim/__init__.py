@@ -15,7 +15,26 @@ from typing import TYPE_CHECKING, Any
 
 from visprim.trial import JOINT_NAMES, MARKER_NAMES, Trial, Truth
 
-__version__ = "0.1.0"
+
+def _version() -> str:
+    """The installed distribution's version; in a source tree, Cargo.toml's (the one place
+    the version is written; maturin gives it to the wheel)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("visprim")
+    except PackageNotFoundError:
+        import tomllib
+        from pathlib import Path
+
+        cargo = Path(__file__).resolve().parents[2] / "Cargo.toml"
+        try:
+            return str(tomllib.loads(cargo.read_text(encoding="utf-8"))["package"]["version"])
+        except (OSError, KeyError, tomllib.TOMLDecodeError):
+            return "0+unknown"
+
+
+__version__: str = _version()
 
 __all__ = ["JOINT_NAMES", "MARKER_NAMES", "PrimitiveModel", "Trial", "Truth", "__version__"]
 

@@ -1,6 +1,6 @@
 """Zero-phase low-pass filtering of joint-angle trajectories, a whole corpus per call.
 
-The method low-passes the angles with a zero-phase Butterworth filter (issue 4, stage 2):
+The method low-passes the angles with a zero-phase Butterworth filter (stage 2 of the method):
 order 10, normalised cutoff 0.25 by default. The cutoff is a fraction of the **Nyquist
 frequency of the frame rate** (scipy's convention): at the generated data's 34 ms sampling
 (29.4 Hz) 0.25 is 3.68 Hz. The filter runs on frames, so it assumes near-uniform sampling

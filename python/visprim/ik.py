@@ -1,6 +1,6 @@
 """Inverse kinematics: four arm markers (or joint centres) → the method's four angles.
 
-Pipeline (issue 4, stage 1), per frame:
+Pipeline (stage 1 of the method), per frame:
 
 1. **Joint centres.** A recording's own joint centres (``Trial.joints``) are used when
    present. Otherwise they are the centres the marker placement implies
@@ -269,7 +269,9 @@ def _joint_centres(markers: ArrayLike, joints: ArrayLike | None, where: str) -> 
     return implied_joint_centres(m)
 
 
-def _unit(v: NDArray[np.float64], what: str, names: list[str], offsets: NDArray[np.int64]):
+def _unit(
+    v: NDArray[np.float64], what: str, names: list[str], offsets: NDArray[np.int64]
+) -> NDArray[np.float64]:
     norm = np.linalg.norm(v, axis=-1)
     bad = norm < _EPS_LENGTH
     if np.any(bad):

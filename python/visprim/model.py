@@ -27,15 +27,15 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from os import PathLike
-from typing import Any, Literal
+from typing import Any, Literal, TypeGuard
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from sklearn.base import BaseEstimator
+from sklearn.base import BaseEstimator, ClusterMixin, TransformerMixin
 from sklearn.exceptions import NotFittedError
 
 from visprim import kernels
-from visprim.errors import DEFAULT_F_VALUES, DEFAULT_K_VALUES, ErrorTables, compute_error_tables
+from visprim.accuracy import DEFAULT_F_VALUES, DEFAULT_K_VALUES, ErrorTables, compute_error_tables
 from visprim.features import FEATURES, n_channels, periodic_channels, to_angles
 from visprim.pca import PCABasis, fit_pca
 from visprim.preprocess import PreparedCorpus, prepare_corpus
@@ -48,7 +48,7 @@ Source = Literal["projection", "cluster"]
 __all__ = ["PrimitiveModel"]
 
 
-class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
+class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
     """Movement primitives learned from arm trials (PCA + k-means of segment vectors).
 
     Parameters
@@ -93,24 +93,62 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
     seed : int
         Seed of k-means (results are deterministic for a seed).
 
-    Attributes (after ``fit``)
-    --------------------------
-    mean_ : (d,) radians — the mean segment vector ``s̄``.
-    eigenvalues_ : (d,) rad², descending — eigenvalues of the covariance K (divisor N).
-    eigenvectors_ : (d, d) — unit eigenvectors as columns.
-    components_ : (d, f) — ``E_f``, the first ``n_components`` eigenvectors.
-    cluster_centers_ : (k, f) — primitive centres in the projection space.
-    labels_ : (N,) int — primitive of each training segment.
-    inertia_ : float — k-means inertia (Σ squared distances, rad²).
-    segment_trial_, segment_starts_, segment_ends_ : (N,) — where each training segment came
-        from (trial index, start and end in seconds).
-    primitive_durations_ : (k,) seconds — mean duration of each primitive's member segments.
-    seg2_threshold_ : float or None — the SEG-2 constant used (tuned or given).
-    trial_names_ : list of str — names of the training trials.
-    training_vectors_ : (N, d) or None — the training segment vectors (kept in memory after
-        ``fit``; not written to the model file, so ``None`` after :meth:`load`).
-    error_tables_ : ErrorTables or None — Tables 1–3 once :meth:`error_table` ran (saved).
-    training_source_ : dict — how to get the training trials again (for reports).
+    Attributes
+    ----------
+    n_features_in_ : int
+        Dimension of the segment vectors seen in ``fit``, ``d = C n_samples``.
+    mean_ : ndarray of shape (d,)
+        The mean segment vector ``s̄``, radians.
+    eigenvalues_ : ndarray of shape (d,)
+        Eigenvalues of the covariance K (divisor N), descending, rad².
+    eigenvectors_ : ndarray of shape (d, d)
+        Unit eigenvectors as columns.
+    components_ : ndarray of shape (d, f)
+        ``E_f``, the first ``n_components`` eigenvectors.
+    cluster_centers_ : ndarray of shape (k, f)
+        Primitive centres in the projection space, radians.
+    labels_ : ndarray of shape (N,)
+        Primitive of each training segment (int).
+    inertia_ : float
+        k-means inertia (sum of squared distances to the centres, rad²).
+    segment_trial_, segment_starts_, segment_ends_ : ndarray of shape (N,)
+        Where each training segment came from: trial index, start and end in seconds
+        (-1 and NaN when fitted on bare segment vectors).
+    primitive_durations_ : ndarray of shape (k,)
+        Mean duration of each primitive's member segments, seconds (NaN when fitted on
+        bare segment vectors).
+    seg2_threshold_ : float or None
+        The SEG-2 constant used (tuned or given).
+    trial_names_ : list of str
+        Names of the training trials.
+    training_vectors_ : ndarray of shape (N, d) or None
+        The training segment vectors (written to the model file unless
+        ``save(..., include_vectors=False)``).
+    error_tables_ : ErrorTables or None
+        Tables 1–3 once :meth:`error_table` ran (saved with the model).
+    training_source_ : dict
+        How to get the training trials again (for reports).
+
+    See Also
+    --------
+    visprim.accuracy : Tables 1–3 (projection, clustering and total error).
+
+    Notes
+    -----
+    A scikit-learn estimator: a transformer (segments → projections) and a clusterer
+    (segments → primitives). ``X`` is a list of :class:`~visprim.trial.Trial` (segmented
+    with the model's settings) or an array of segment vectors of shape (N, C n_samples),
+    C channels per frame (see ``features`` and :mod:`visprim.vectors`). :meth:`score` is the
+    negative total error, so ``GridSearchCV`` picks the parameters that rebuild held-out
+    segments best.
+
+    Examples
+    --------
+    >>> from visprim.datasets import imitation_experiment
+    >>> trials = imitation_experiment(n_subjects=2, n_stimuli=4, seed=0)
+    >>> model = PrimitiveModel(n_components=8, n_clusters=5).fit(trials)
+    >>> model.transform(trials).shape[1]
+    8
     """
 
     def __init__(
@@ -278,16 +316,30 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
 
     def fit(
         self,
-        trials: Sequence[Trial],
+        trials: Sequence[Trial] | ArrayLike,
         y: Any = None,
         *,
         source: dict[str, Any] | None = None,
     ) -> PrimitiveModel:
-        """Learn the primitives from ``trials`` (a list of :class:`~visprim.trial.Trial`).
+        """Learn the primitives from trials or from segment vectors.
 
-        ``y`` is ignored (scikit-learn convention). ``source`` optionally records how to get
-        the trials again (e.g. ``{"kind": "generated", ...}`` or ``{"kind": "files",
-        "paths": [...]}``) so that ``visprim report`` can redraw the trial figures.
+        Parameters
+        ----------
+        trials : list of Trial, or array-like of shape (N, C n_samples)
+            The training movements (:class:`~visprim.trial.Trial`, segmented with this
+            model's settings), or their segment vectors in radians (see
+            :mod:`visprim.vectors`; the model then has no durations or trial names).
+        y : None
+            Ignored (scikit-learn convention).
+        source : dict, optional
+            How to get the trials again (e.g. ``{"kind": "generated", ...}`` or
+            ``{"kind": "files", "paths": [...]}``) so that ``visprim report`` can redraw the
+            trial figures.
+
+        Returns
+        -------
+        self : PrimitiveModel
+            The fitted model.
 
         Raises
         ------
@@ -295,6 +347,8 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
             Bad parameters, an empty corpus, fewer segments than ``n_clusters`` (or than 2).
         """
         self._validate_params()
+        if not _are_trials(trials):
+            return self._fit_array(trials, source=source)
         trials = _as_trials(trials)
         for attr in [a for a in vars(self) if a.endswith("_") and not a.startswith("_")]:
             delattr(self, attr)
@@ -328,6 +382,7 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
             tol=float(self.tol),
             seed=int(self.seed),
         )
+        self.n_features_in_ = int(sv.vectors.shape[1])
         self.mean_ = basis.mean
         self.eigenvalues_ = basis.eigenvalues
         self.eigenvectors_ = basis.eigenvectors
@@ -410,28 +465,38 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         ):
             sv = self.vectorize(self.prepare(_as_trials(X)))
             return sv.vectors, sv
-        x = np.asarray(X, dtype=np.float64)
-        x = np.atleast_2d(x)
-        if x.ndim != 2 or x.shape[1] != self.dim:
-            raise ValueError(
-                f"expected segment vectors of shape (N, {self.dim}) or a list of Trial, "
-                f"got an array of shape {np.asarray(X).shape}"
-            )
-        if not np.all(np.isfinite(x)):
-            raise ValueError("segment vectors contain NaN or infinity")
-        return x, None
+        return self._check_vectors(X, fitting=False), None
 
     def transform(self, X: ArrayLike | Sequence[Trial] | Trial) -> NDArray[np.float64]:
-        """Projections ``p = E_fᵀ (s − s̄)``, shape (N, f).
+        """Projections ``p = E_fᵀ (s − s̄)`` of segments on the first f eigenvectors.
 
-        ``X``: segment vectors (N, d) in radians, or trial(s), which are segmented with the
-        fitted settings first (segments in trial order).
+        Parameters
+        ----------
+        X : array-like of shape (N, d), Trial or list of Trial
+            Segment vectors in radians, or trial(s), which are segmented with the fitted
+            settings first (segments in trial order).
+
+        Returns
+        -------
+        ndarray of shape (N, f)
+            The projections, radians.
         """
         self._check_fitted()
         return self.basis_.project(self._vectors_of(X), int(self.n_components))
 
     def predict(self, X: ArrayLike | Sequence[Trial] | Trial) -> NDArray[np.int64]:
-        """Primitive (nearest cluster centre in the projection space) of each segment."""
+        """Primitive (nearest cluster centre in the projection space) of each segment.
+
+        Parameters
+        ----------
+        X : array-like of shape (N, d), Trial or list of Trial
+            Segment vectors in radians, or trial(s) (see :meth:`transform`).
+
+        Returns
+        -------
+        ndarray of shape (N,)
+            Primitive index of each segment (int).
+        """
         labels, _ = self.assign(self.transform(X))
         return labels
 
@@ -579,7 +644,7 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         f_values: Sequence[int] = DEFAULT_F_VALUES,
         k_values: Sequence[int] = DEFAULT_K_VALUES,
     ) -> ErrorTables:
-        """Tables 1–3 (projection, clustering and total error; see :mod:`visprim.errors`)
+        """Tables 1–3 (projection, clustering and total error; see :mod:`visprim.accuracy`)
         on the training segments.
 
         Needs the training vectors (kept after ``fit``). After :meth:`load` the tables saved
@@ -615,22 +680,223 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
 
     # ------------------------------------------------------------------ persistence
 
-    def save(self, path: str | PathLike[str]) -> None:
-        """Write the fitted model to one file (see :mod:`visprim.modelfile`), atomically."""
-        from visprim.modelfile import save_model
+    def save(self, path: str | PathLike[str], *, include_vectors: bool = True) -> None:
+        """Write the fitted model to one file (see :mod:`visprim.modelfile`), atomically.
+
+        ``include_vectors=False`` leaves out the training segment vectors (N × d float64):
+        a smaller file whose :meth:`error_table` only returns the tables computed before
+        saving.
+        """
+        from visprim.modelfile import write_model_file
 
         self._check_fitted()
-        save_model(self, path)
+        arrays: dict[str, Any] = {
+            "mean": self.mean_,
+            "eigenvalues": self.eigenvalues_,
+            "eigenvectors": self.eigenvectors_,
+            "cluster_centers": self.cluster_centers_,
+            "labels": self.labels_,
+            "segment_trial": self.segment_trial_,
+            "segment_starts": self.segment_starts_,
+            "segment_ends": self.segment_ends_,
+            "primitive_durations": self.primitive_durations_,
+        }
+        if include_vectors and getattr(self, "training_vectors_", None) is not None:
+            arrays["training_vectors"] = self.training_vectors_
+        tables = getattr(self, "error_tables_", None)
+        fitted = {
+            "inertia": float(self.inertia_),
+            "n_iter": int(self.n_iter_),
+            "seg2_threshold": None if self.seg2_threshold_ is None else float(self.seg2_threshold_),
+            "n_training_segments": int(self.n_training_segments_),
+            "trial_names": [str(n) for n in self.trial_names_],
+            "training_source": dict(self.training_source_ or {}),
+            "arms": list(getattr(self, "arms_", ("right",))),
+            "n_trials_without_segments": int(getattr(self, "n_trials_without_segments_", 0)),
+            "n_short_trials": int(getattr(self, "n_short_trials_", 0)),
+        }
+        header = {
+            "parameters": self.get_params(),
+            "fitted": fitted,
+            "error_tables": tables.to_dict() if tables is not None else None,
+        }
+        write_model_file(path, header, arrays)
 
     @classmethod
     def load(cls, path: str | PathLike[str]) -> PrimitiveModel:
-        """Read a model written by :meth:`save` (see :mod:`visprim.modelfile`)."""
-        from visprim.modelfile import load_model
+        """Read a model written by :meth:`save` (see :mod:`visprim.modelfile`); its
+        parameters are checked as :meth:`fit` checks them."""
+        from visprim.modelfile import ModelFileError, load_model
 
-        return load_model(path)
+        contents = load_model(path)
+        a, fitted = contents.arrays, contents.fitted
+        arms = fitted.get("arms", ["right"])
+        try:
+            if not isinstance(arms, list) or not 1 <= len(arms) <= 2:
+                raise ValueError(f"arms {arms!r} is not a list of one or two arms")
+            if any(side not in ("right", "left") for side in arms):
+                raise ValueError(f"arms {arms!r} are not 'right'/'left'")
+            model = cls(**contents.parameters)
+            model.arms_ = tuple(arms)
+            model._validate_params()
+            tables = contents.error_tables
+            model.error_tables_ = ErrorTables.from_dict(tables) if tables else None
+        except (TypeError, ValueError, LookupError, AttributeError) as exc:
+            raise ModelFileError(f"{contents.path}: model parameters not accepted: {exc}") from None
+        if a["mean"].shape[0] != model.dim or a["cluster_centers"].shape[1] != model.n_components:
+            raise ModelFileError(
+                f"{contents.path}: damaged model file: array shapes do not fit the parameters"
+            )
+        for name in ("mean", "eigenvalues", "eigenvectors", "cluster_centers", "labels"):
+            setattr(model, name + "_", a[name])
+        for name in ("segment_trial", "segment_starts", "segment_ends", "primitive_durations"):
+            setattr(model, name + "_", a[name])
+        model.training_vectors_ = a.get("training_vectors")
+        model.training_projections_ = None
+        model.inertia_ = float(fitted["inertia"])
+        model.n_iter_ = int(fitted["n_iter"])
+        model.seg2_threshold_ = fitted["seg2_threshold"]
+        model.n_training_segments_ = int(fitted["n_training_segments"]) or len(a["labels"])
+        model.trial_names_ = list(fitted["trial_names"])
+        model.training_source_ = dict(fitted["training_source"])
+        model.n_trials_without_segments_ = int(fitted.get("n_trials_without_segments", 0))
+        model.n_short_trials_ = int(fitted.get("n_short_trials", 0))
+        return model
 
     def __sklearn_is_fitted__(self) -> bool:
         return hasattr(self, "cluster_centers_")
+
+    # ------------------------------------------------------------------ scikit-learn API
+
+    def _check_vectors(self, X: Any, *, fitting: bool) -> NDArray[np.float64]:
+        """``X`` as a finite float64 array of segment vectors (N, d), checked like
+        scikit-learn does (no sparse, complex or 1-D input; ``d`` = ``n_features_in_``
+        after fitting)."""
+        from sklearn.utils.validation import check_array
+
+        x: NDArray[np.float64] = check_array(
+            X, dtype=np.float64, order="C", ensure_min_samples=2 if fitting else 1
+        )
+        d = int(x.shape[1])
+        if fitting:
+            if int(self.n_components) > d:
+                raise ValueError(
+                    f"n_components={self.n_components} exceeds the dimension of the vectors "
+                    f"(n_features = {d}); lower n_components"
+                )
+            return x
+        expected = int(getattr(self, "n_features_in_", self.dim))
+        if d != expected:
+            raise ValueError(
+                f"X has {d} features, but PrimitiveModel is expecting {expected} features as "
+                f"input (segment vectors of shape (N, {expected}), or trials)"
+            )
+        return x
+
+    def _fit_array(self, X: Any, *, source: dict[str, Any] | None = None) -> PrimitiveModel:
+        """``fit`` on vectors (N, d): segment vectors (d = C n_samples), or any features, for
+        which the PCA and k-means parts work but the angle-curve methods do not."""
+        x = self._check_vectors(X, fitting=True)
+        for attr in [a for a in vars(self) if a.endswith("_") and not a.startswith("_")]:
+            delattr(self, attr)
+        n = x.shape[0]
+        sv = SegmentVectors(
+            vectors=x,
+            trial=np.full(n, -1, dtype=np.int64),
+            starts=np.full(n, np.nan),
+            ends=np.full(n, np.nan),
+            n_samples=int(self.n_samples),
+            offsets=np.zeros((n, self.n_channels)),
+        )
+        return self._fit_vectors(sv, None, source=source)
+
+    def fit_transform(
+        self, X: ArrayLike | Sequence[Trial], y: Any = None, **fit_params: Any
+    ) -> NDArray[np.float64]:
+        """Fit, then return the projections of the training segments.
+
+        Parameters
+        ----------
+        X : array-like of shape (N, d), or list of Trial
+            Training segment vectors (radians) or trials (see :meth:`fit`).
+        y : None
+            Ignored.
+        **fit_params : dict
+            Passed to :meth:`fit` (``source``).
+
+        Returns
+        -------
+        ndarray of shape (N, f)
+            The projections of the training segments, equal to ``fit(X).transform(X)``.
+        """
+        self.fit(X, y, **fit_params)
+        return np.array(self.training_projections_, dtype=np.float64)
+
+    def fit_predict(
+        self, X: ArrayLike | Sequence[Trial], y: Any = None, **fit_params: Any
+    ) -> NDArray[np.int64]:
+        """Fit, then return the primitive of each training segment (``labels_``).
+
+        Parameters
+        ----------
+        X : array-like of shape (N, d), or list of Trial
+            Training segment vectors (radians) or trials (see :meth:`fit`).
+        y : None
+            Ignored.
+        **fit_params : dict
+            Passed to :meth:`fit` (``source``).
+
+        Returns
+        -------
+        ndarray of shape (N,)
+            Primitive index of each training segment.
+        """
+        self.fit(X, y, **fit_params)
+        return np.array(self.labels_, dtype=np.int64)
+
+    def score(self, X: ArrayLike | Sequence[Trial] | Trial, y: Any = None) -> float:
+        """Negative total error: ``−mean ‖s − (E_f c + s̄)‖²`` over the segments of ``X``.
+
+        Each segment vector ``s`` is rebuilt from the centre ``c`` of its primitive; this is
+        Table 3's total error (projection + clustering, see :mod:`visprim.accuracy`) on
+        ``X`` instead of the training segments. Higher is better, so ``GridSearchCV`` can
+        pick ``n_components``, ``n_clusters``, the segmentation...
+
+        Parameters
+        ----------
+        X : array-like of shape (N, d), Trial or list of Trial
+            Segment vectors in radians, or trial(s) (see :meth:`transform`).
+        y : None
+            Ignored.
+
+        Returns
+        -------
+        float
+            Minus the mean squared error per segment vector, rad².
+        """
+        self._check_fitted()
+        x, _ = self._segment_vectors_of(X)
+        p = self.basis_.project(x, int(self.n_components))
+        rebuilt = self._reconstruct_vectors(p, "cluster")
+        return -float(np.mean(np.sum((x - rebuilt) ** 2, axis=1)))
+
+
+def _are_trials(X: Any) -> TypeGuard[Sequence[Trial] | Trial]:
+    """Whether ``fit`` takes ``X`` as trials (else as segment vectors): a Trial, or a
+    sequence that is not rows of numbers (other items are reported by :func:`_as_trials`)."""
+    if isinstance(X, Trial):
+        return True
+    if isinstance(X, np.ndarray):
+        return X.dtype == object and X.size > 0 and isinstance(X.flat[0], Trial)
+    if isinstance(X, (list, tuple)):
+        if not X:
+            return True
+        first = X[0]
+        row = isinstance(first, (list, tuple)) or (
+            isinstance(first, np.ndarray) and first.ndim <= 1
+        )
+        return not (row or isinstance(first, (int, float, np.number)))
+    return False
 
 
 def _as_trials(trials: Sequence[Trial] | Trial) -> list[Trial]:

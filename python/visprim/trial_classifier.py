@@ -58,7 +58,7 @@ def primitive_histograms(
     return rows
 
 
-class PrimitiveHistogramClassifier(ClassifierMixin, BaseEstimator):  # type: ignore[misc]
+class PrimitiveHistogramClassifier(ClassifierMixin, BaseEstimator):
     """Primitives (PrimitiveModel) + a classifier of their per-trial histograms.
 
     Parameters

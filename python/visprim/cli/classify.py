@@ -3,20 +3,23 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 from typing import Any
 
-from visprim.cli import common
+from visprim.cli import common, outputs
 
 
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from visprim.classify import classify_trials, score_against_truth
-    from visprim.model import PrimitiveModel
 
-    model = PrimitiveModel.load(args.model)
-    trials, _ = common.trials_and_source(args, common.model_period(model))
+    out = None
+    if args.out:
+        out = outputs.check_file(args.out, (".csv",), force=args.force, what="segment table")
+    model = common.load_model(args.model)
+    trials, _ = common.trials_and_source(
+        args, common.model_period(model), common.model_lowpass(model)
+    )
     results = classify_trials(model, trials)
     lines = []
     for r in results:
@@ -25,10 +28,8 @@ def run(args: argparse.Namespace) -> int:
         top_s = ", ".join(f"#{i}x{hist[i]}" for i in top if hist[i] > 0)
         lines.append(f"{r.name}: sequence {list(r.sequence)}; histogram {top_s or '-'}")
     print("\n".join(lines))
-    if args.out:
-        out = Path(args.out)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        with out.open("w", encoding="utf-8") as fh:
+    if out is not None:
+        with outputs.atomic_file(out) as tmp, tmp.open("w", encoding="utf-8") as fh:
             fh.write("trial,segment,start_s,end_s,primitive,distance_rad\n")
             for r in results:
                 for j, ((s, e), lab, d) in enumerate(
@@ -53,6 +54,10 @@ def register(sub: Any) -> None:
     p.add_argument(
         "data", nargs="*", metavar="DATA", help="recordings (default: the generated experiment)"
     )
-    p.add_argument("--out", default=None, help="also write the segment primitives as CSV")
+    p.add_argument(
+        "--out", default=None, metavar="CSV", help="also write the segment primitives (.csv)"
+    )
+    common.add_force_option(p)
+    common.add_reader_options(p)
     common.add_generated_options(p)
     p.set_defaults(func=run)

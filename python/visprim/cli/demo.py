@@ -1,13 +1,19 @@
-"""``visprim demo``: the default experiment end to end (scores, Tables 1-3, report)."""
+"""``visprim demo``: the default experiment end to end (scores, Tables 1-3, report).
+
+Everything (models, report, primitive GIFs) is written into a hidden folder beside ``--out``
+and swapped in at the end (:func:`visprim.cli.outputs.atomic_folder`)."""
 
 from __future__ import annotations
 
 import argparse
+import logging
 import time
 from pathlib import Path
 from typing import Any
 
-from visprim.cli import common
+from visprim.cli import common, logs, outputs
+
+log = logging.getLogger(__name__)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -17,16 +23,20 @@ def run(args: argparse.Namespace) -> int:
     from visprim.report import format_segmentation_scores, segmentation_scores, write_report
 
     t0 = time.perf_counter()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = outputs.check_folder(args.out, force=args.force)
     source = common.generated_source(args)
-    log: list[str] = []
+    common.model_from_args(args)  # checks the options before the long work
+    console: list[str] = []
 
     def say(text: str = "") -> None:
         print(text, flush=True)
-        log.append(text)
+        console.append(text)
 
-    with stages(7, "demo") as st:
+    with (
+        outputs.atomic_folder(out, "demo") as tmp,
+        logs.paths_shown_as(tmp, out),
+        stages(7, "demo") as st,
+    ):
         st.step("generating the experiment")
         trials = imitation_experiment(source["n_subjects"], source["n_stimuli"], source["seed"])
         n_true = len({int(v) for t in trials for v in t.truth.labels})  # type: ignore[union-attr]
@@ -47,8 +57,9 @@ def run(args: argparse.Namespace) -> int:
             model = common.model_from_args(args, segmentation=method)
             model.fit(trials, source=source)
             models[method] = model
-            path = save_model(model, out / f"model_{method}.npz")
-            say(f"{common.label(method)}: {common.summary(model, len(trials))}; saved {path}")
+            name = f"model_{method}.npz"
+            save_model(model, tmp / name)
+            say(f"{common.label(method)}: {common.summary(model, len(trials))}; saved {out / name}")
             tables = model.error_table()
             say(f"\nTables 1-3 ({common.label(method)} model):\n")
             say(tables.to_markdown())
@@ -65,17 +76,18 @@ def run(args: argparse.Namespace) -> int:
         )
 
         st.step("report")
-        rep = write_report(
+        write_report(
             models["seg2"],
-            out,
+            tmp,
             trials,
-            extra_sections=[("visprim demo output", "\n".join(log))],
+            extra_sections=[("visprim demo output", "\n".join(console))],
             title="visprim demo: primitives of the generated imitation experiment (SEG-2)",
         )
-    gifs = _demo_sim(models["seg2"], out / "primitives", args)
+        st.step("primitives on the humanoid")
+        gifs = [outputs.moved(g, tmp, out) for g in _demo_sim(models["seg2"], tmp, args)]
     elapsed = time.perf_counter() - t0
     print()
-    print(f"Report:  {rep.index}  (figures, tables1-3 .md/.csv, index.html)")
+    print(f"Report:  {out / 'index.html'}  (figures, tables1-3 .md/.csv, index.html)")
     print(f"Models:  {out / 'model_seg2.npz'}, {out / 'model_seg1.npz'}")
     if gifs:
         print(f"Primitives on the simulated humanoid: {', '.join(str(g) for g in gifs)}")
@@ -89,20 +101,9 @@ def _demo_sim(model: Any, out_dir: Path, args: argparse.Namespace) -> list[Path]
     try:
         from visprim.sim.showcase import demo_primitives
     except ImportError as exc:
-        print(f"note: the humanoid simulation is not available ({exc}); no primitive GIFs")
+        log.warning("the humanoid simulation is not available (%s); no primitive GIFs", exc)
         return []
-    return list(demo_primitives(model, out_dir, n=args.sim_primitives))
-
-
-def _demo_sim(model: Any, out_dir: Path, args: argparse.Namespace) -> list[Path]:
-    if args.no_sim:
-        return []
-    try:
-        from visprim.sim.showcase import demo_primitives
-    except ImportError as exc:
-        print(f"note: the humanoid simulation is not available ({exc}); no primitive GIFs")
-        return []
-    return list(demo_primitives(model, out_dir, n=args.sim_primitives))
+    return list(demo_primitives(model, out_dir / "primitives", n=args.sim_primitives))
 
 
 def register(sub: Any) -> None:
@@ -113,13 +114,16 @@ def register(sub: Any) -> None:
         "Tables 1-3, write the report",
         description="Generate the default imitation experiment, learn primitives with SEG-1 "
         "and SEG-2, print the segmentation scores and Tables 1-3, write the report (and "
-        "primitive GIFs on the simulated humanoid) to --out.",
+        "primitive GIFs on the simulated humanoid) to the folder --out.",
     )
-    p.add_argument("--out", default="out/demo", help="output folder (default out/demo)")
+    p.add_argument(
+        "--out", default="out/demo", metavar="FOLDER", help="output folder (default out/demo)"
+    )
+    common.add_force_option(p)
     p.add_argument("--no-sim", action="store_true", help="skip the humanoid GIFs")
     p.add_argument(
         "--sim-primitives",
-        type=int,
+        type=common.seed_int,
         default=3,
         help="primitives to render on the humanoid (default 3)",
     )

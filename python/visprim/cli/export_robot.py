@@ -3,41 +3,39 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Any
+
+from visprim.cli import common, outputs
 
 
 def run(args: argparse.Namespace) -> int:
     """``visprim export-robot --out adonis.urdf [--model MODEL --trajectories DIR]``."""
-    from visprim.sim.urdf import urdf_joint_names, write_urdf
+    from visprim.sim.urdf import adonis_urdf, urdf_joint_names
 
     if args.trajectories is not None and args.model is None:
-        print("visprim export-robot: --trajectories needs --model MODEL", file=sys.stderr)
-        return 2
-    try:
-        path = write_urdf(args.out)
-    except (ValueError, OSError) as exc:
-        print(f"visprim export-robot: {exc}", file=sys.stderr)
-        return 2
-    print(f"wrote {path} ({len(urdf_joint_names())} joints: {' '.join(urdf_joint_names())})")
-    if args.model is None:
+        raise common.UsageError("--trajectories needs --model MODEL (whose primitives to export)")
+    if args.model is not None and not Path(args.model).is_file():
+        raise common.UsageError(f"model file {args.model!r} not found")
+    out = outputs.check_file(args.out, (".urdf",), force=args.force, what="robot file")
+    folder = None
+    if args.model is not None:
+        folder = outputs.check_folder(
+            args.trajectories or "primitive_trajectories", force=args.force, option="--trajectories"
+        )
+    with outputs.atomic_file(out) as tmp:
+        tmp.write_text(adonis_urdf(), encoding="utf-8")
+    names = urdf_joint_names()
+    print(f"wrote {out} ({len(names)} joints: {' '.join(names)})")
+    if args.model is None or folder is None:
         return 0
-    if not Path(args.model).is_file():
-        print(f"visprim export-robot: model file {args.model!r} not found", file=sys.stderr)
-        return 2
-    from visprim import PrimitiveModel
     from visprim.sim.export import primitive_trajectory
 
-    out = Path(args.trajectories or ".")
-    try:
-        model = PrimitiveModel.load(args.model)
+    model = common.load_model(args.model)
+    with outputs.atomic_folder(folder, "export-robot") as tmp_dir:
         for k in range(model.n_primitives):
-            js, cs = primitive_trajectory(model, k).write(out / f"primitive_{k:02d}")
-    except (ValueError, OSError) as exc:
-        print(f"visprim export-robot: {exc}", file=sys.stderr)
-        return 2
-    print(f"wrote {model.n_primitives} primitive trajectories (JSON + CSV) to {out}")
+            primitive_trajectory(model, k).write(tmp_dir / f"primitive_{k:02d}")
+    print(f"wrote {model.n_primitives} primitive trajectories (JSON + CSV) to {folder}")
     return 0
 
 
@@ -55,5 +53,9 @@ def register(sub: Any) -> None:
     )
     p.add_argument("--out", default="adonis.urdf", help="URDF file to write (default adonis.urdf)")
     p.add_argument("--model", help="model file whose primitives to export as trajectories")
-    p.add_argument("--trajectories", help="folder for the primitive trajectories (default .)")
+    p.add_argument(
+        "--trajectories",
+        help="folder for the primitive trajectories (default primitive_trajectories)",
+    )
+    common.add_force_option(p)
     p.set_defaults(func=run)

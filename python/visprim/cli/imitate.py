@@ -3,61 +3,57 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 from typing import Any
+
+from visprim.cli import common, outputs
 
 
 def run(args: argparse.Namespace) -> int:
     """``visprim imitate MODEL RECORDING --out DIR``; see :mod:`visprim.imitate`."""
-    from visprim.sim.video import check_video_path
-
-    if not Path(args.model).is_file():
-        print(f"visprim imitate: model file {args.model!r} not found", file=sys.stderr)
-        return 2
-    if not Path(args.recording).is_file():
-        print(f"visprim imitate: recording {args.recording!r} not found", file=sys.stderr)
-        return 2
-    video = None if args.no_video else args.video
-    try:
-        if video is not None:
-            check_video_path(Path(args.out) / video)
-    except (ValueError, ImportError) as exc:
-        print(f"visprim imitate: {exc}", file=sys.stderr)
-        return 2
-    from visprim import PrimitiveModel
-    from visprim.imitate import imitate, write_imitation
-    from visprim.io import ReadError, read
     from visprim.progress import stages
-    from visprim.sim.playback import SimulationDiverged
+    from visprim.sim.video import VIDEO_FORMATS, check_video_path
 
+    for what, path in (("model file", args.model), ("recording", args.recording)):
+        if not Path(path).is_file():
+            raise common.UsageError(f"{what} {path!r} not found")
+    video = None if args.no_video else args.video
+    if video is not None:
+        try:
+            check_video_path(video)
+        except ValueError:
+            raise common.UsageError(
+                f"--video {video}: unsupported video format; name it .gif or .mp4 "
+                f"({', '.join(f'{e}: {w}' for e, w in VIDEO_FORMATS.items())})"
+            ) from None
+    out = outputs.check_folder(args.out, force=args.force, inputs=[args.model, args.recording])
     dt = args.dt if args.dt is not None else (0.001 if args.servo == "stable" else 0.0001)
-    try:
-        model = PrimitiveModel.load(args.model)
-        options: dict[str, Any] = {}
-        if args.skeleton is not None:
-            options["skeleton"] = args.skeleton
-        if args.rate is not None:
-            options["rate"] = args.rate
-        with stages(3, "imitate") as progress:
-            progress.step("reading")
-            trial = read(args.recording, **options)
-            progress.step(f"segmenting, rebuilding, playing {trial.duration:.1f} s on Adonis")
-            result = imitate(model, trial, source=args.source, servo=args.servo, dt=dt)
-            progress.step("writing files" + (" and the video" if video else ""))
-            paths = write_imitation(
+    from visprim.imitate import imitate, write_imitation
+    from visprim.io import read
+
+    with stages(4, "imitate") as progress:
+        progress.step("loading")
+        model = common.load_model(args.model)
+        opts = common.reader_options(args)
+        arm = opts.pop("arm")
+        if len(getattr(model, "arms_", ("right",))) == 2:
+            arm = "both"  # a two-arm model imitates both arms of the recording
+        trial = read(args.recording, arm, **opts)
+        progress.step(f"segmenting, rebuilding, playing {trial.duration:.1f} s on Adonis")
+        result = imitate(model, trial, source=args.source, servo=args.servo, dt=dt)
+        progress.step("writing files" + (" and the video" if video else ""))
+        with outputs.atomic_folder(out, "imitate") as tmp:
+            written = write_imitation(
                 result,
-                args.out,
+                tmp,
                 video=video,
                 size=(args.size, args.size),
                 extra={"model": str(Path(args.model).resolve())},
             )
-        print(result.summary())
-    except (ReadError, ValueError, OSError, SimulationDiverged) as exc:
-        print(f"visprim imitate: {exc}", file=sys.stderr)
-        return 2
-    for kind, path in paths.items():
-        print(f"wrote {path} ({kind})")
+        progress.step("done")
+    print(result.summary())
+    for kind, path in written.items():
+        print(f"wrote {outputs.moved(path, tmp, out)} ({kind})")
     return 0
 
 
@@ -88,8 +84,8 @@ def register(sub: Any) -> None:
         "--servo",
         choices=("stable", "paper"),
         default="stable",
-        help="stable PD along the trajectory (default) or the paper's explicit PD with "
-        "via-point switching",
+        help="stable PD along the trajectory with inverse-dynamics feedforward (default) or "
+        "the paper's explicit PD with via-point switching",
     )
     p.add_argument(
         "--dt",
@@ -105,8 +101,6 @@ def register(sub: Any) -> None:
     )
     p.add_argument("--no-video", action="store_true", help="write no video")
     p.add_argument("--size", type=int, default=480, help="panel size in pixels (default 480)")
-    p.add_argument(
-        "--skeleton", help="ASF skeleton of an .amc recording (default: found next to it)"
-    )
-    p.add_argument("--rate", type=float, help="frame rate of an .amc recording, Hz")
+    common.add_force_option(p)
+    common.add_reader_options(p, many=False)
     p.set_defaults(func=run)

@@ -7,33 +7,51 @@ segments found (it does not silently learn fewer primitives than asked); lower
 from __future__ import annotations
 
 import argparse
+import logging
 from typing import Any
 
-from visprim.cli import common
+from visprim.cli import common, outputs
+
+log = logging.getLogger(__name__)
 
 
 def run(args: argparse.Namespace) -> int:
     from visprim.modelfile import save_model
     from visprim.progress import stages
 
+    out = outputs.check_file(args.out, (".npz",), force=args.force, what="model file")
+    model = common.model_from_args(args)
     with stages(3, "learn") as st:
         st.step("reading data")
-        trials, source = common.trials_and_source(args, args.resample)
+        trials, source = common.trials_and_source(
+            args, args.resample, (args.filter_order, args.cutoff)
+        )
+        log.debug("learning from %d trials", len(trials))
         st.step(f"fitting {len(trials)} trials")
-        model = common.model_from_args(args)
         try:
             model.fit(trials, source=source)
         except ValueError as exc:
-            hint = " (option --clusters)" if "n_clusters=" in str(exc) else ""
-            raise SystemExit(f"visprim learn: {exc}{hint}") from None
+            raise common.CLIError(_with_fix(str(exc))) from None
         st.step("error tables")
         tables = model.error_table()
-    path = save_model(model, args.out)
+    path = save_model(model, out)
     print(common.summary(model, len(trials)))
     print()
     print(tables.to_markdown())
     print(f"model written to {path}")
     return 0
+
+
+def _with_fix(message: str) -> str:
+    message = message.removeprefix("fit: ")
+    if "short='reduce'" in message:  # the filter's advice, in command-line terms
+        head = message.split("; drop them")[0]
+        return f"{head}; leave them out with --short drop (the default)"
+    if "n_clusters=" in message:
+        return message.replace("lower n_clusters", "lower --clusters")
+    if "segment" in message and "found" in message:
+        return f"{message}; give more or longer recordings, or try --segmentation seg1"
+    return message
 
 
 def register(sub: Any) -> None:
@@ -51,9 +69,10 @@ def register(sub: Any) -> None:
         help="recording files, folders or globs (default: the generated experiment)",
     )
     p.add_argument("--out", required=True, metavar="MODEL", help="model file to write (.npz)")
+    common.add_force_option(p)
     p.add_argument(
         "--resample",
-        type=float,
+        type=common.period_s,
         default=common.DEFAULT_RESAMPLE_S,
         metavar="SECONDS",
         help="resample DATA to this frame period before learning, so that --cutoff and the "
@@ -66,6 +85,7 @@ def register(sub: Any) -> None:
         const=None,
         help="keep each recording's own frame rate",
     )
+    common.add_reader_options(p)
     common.add_generated_options(p)
     common.add_model_options(p)
     p.set_defaults(func=run)

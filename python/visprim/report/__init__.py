@@ -3,7 +3,7 @@
 :func:`write_report` writes into one folder:
 
 * ``tables.md`` and ``table1.md/.csv``, ``table2.md/.csv``, ``table3.md/.csv`` — projection,
-  clustering and total error (:mod:`visprim.errors`);
+  clustering and total error (:mod:`visprim.accuracy`);
 * ``eigenvalues.png`` (spectrum), ``eigenvectors.png`` (paper Fig. 8), ``primitives.png``
   (Fig. 9) — from the model alone;
 * with trials (the model does not store trials; pass them, e.g. read again from the files
@@ -262,7 +262,8 @@ def _trial_figures(
     seg2_corpus = model.prepare([trial], segmentation="seg2")
     seg = seg2_corpus.segmentation
     z = seg.z if seg.z is not None else np.zeros_like(times)
-    c_used = float(seg.trial_thresholds[0] if seg.trial_thresholds is not None else seg.threshold)
+    c_trial = seg.trial_thresholds[0] if seg.trial_thresholds is not None else seg.threshold
+    c_used = float("nan") if c_trial is None else float(c_trial)
     segs = seg2_corpus.segments[0]
     files.append(
         figures.plot_seg2(

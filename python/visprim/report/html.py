@@ -7,7 +7,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from visprim.errors import ErrorTable, _fmt
+from visprim.accuracy import ErrorTable, _fmt
 
 _CSS = """
 body { font-family: system-ui, sans-serif; max-width: 1150px; margin: 2em auto; padding: 0 1em;
@@ -63,7 +63,7 @@ def figure(src: str, caption: str) -> str:
 
 
 def table(t: ErrorTable, links: Sequence[tuple[str, str]] = ()) -> str:
-    """An :class:`~visprim.errors.ErrorTable` as an HTML table (+ links to its files)."""
+    """An :class:`~visprim.accuracy.ErrorTable` as an HTML table (+ links to its files)."""
     head = "".join(f"<th>{html.escape(c)}</th>" for c in t.columns)
     rows = "".join(
         "<tr>" + "".join(f"<td>{html.escape(_fmt(v))}</td>" for v in r) + "</tr>" for r in t.rows

@@ -1,4 +1,4 @@
-"""Segmentation of joint-angle trajectories (issue 4, stage 3).
+"""Segmentation of joint-angle trajectories (stage 3 of the method).
 
 * :func:`zvc` — zero-velocity crossings per DOF with a significant-movement threshold;
 * :func:`seg1` — SEG-1: cut where several DOFs have a ZVC within 300 ms (not a partition);

@@ -320,7 +320,9 @@ def _min_travel(min_travel_deg: float) -> float:
     return float(np.deg2rad(min_travel_deg))
 
 
-def _segment_counts(corpus: _Corpus, grid: NDArray[np.float64], min_travel: float):
+def _segment_counts(
+    corpus: _Corpus, grid: NDArray[np.float64], min_travel: float
+) -> NDArray[np.int64]:
     m = corpus.offsets.size
     counts = np.empty((m, grid.size), dtype=np.int64)
     for k, c in enumerate(grid):

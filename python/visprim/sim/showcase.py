@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import csv
+import logging
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, Protocol
@@ -14,6 +15,8 @@ from numpy.typing import NDArray
 from visprim.sim.model import build_adonis
 from visprim.sim.playback import Playback, play
 from visprim.sim.render import render_gif
+
+log = logging.getLogger(__name__)
 
 
 class PrimitiveSource(Protocol):
@@ -108,7 +111,7 @@ def demo_primitives(
     rms = np.array([p.rms_error_deg for p in playbacks.values()])
     ratio = np.array([p.time_ratio for p in playbacks.values()])
     reached = sum(p.reached_all for p in playbacks.values())
-    print(
+    log.info(
         f"Adonis played all {k} primitives: RMS tracking error mean {rms.mean():.2f} deg, "
         f"worst {rms.max():.2f} deg; completion at most {ratio.max():.2f}x the primitive's "
         f"duration; all via points reached in {reached}/{k}. Metrics: {csv_path}"
@@ -117,6 +120,6 @@ def demo_primitives(
     for i in chosen:
         pb = playbacks[i]
         path = render_gif(pb, out / f"adonis_primitive_{i:02d}.gif", title=f"primitive {i}")
-        print(f"  primitive {i:2d}: {pb.summary()} -> {path}")
+        log.info(f"  primitive {i:2d}: {pb.summary()} -> {path}")
         paths.append(path)
     return paths

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 from _pipeline_data import fitted
-from visprim.errors import (
+from visprim.accuracy import (
     NEGATIVE_EIGENVALUE_TOLERANCE,
     ErrorTables,
     angular_error_deg,

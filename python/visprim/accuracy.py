@@ -29,7 +29,7 @@ from __future__ import annotations
 import csv
 import io
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -138,7 +138,7 @@ def total_error(
 
 @dataclass(frozen=True)
 class ErrorTable:
-    """One table: a title, column names and rows of numbers (see :mod:`visprim.errors`)."""
+    """One table: a title, column names and rows of numbers (see :mod:`visprim.accuracy`)."""
 
     title: str
     columns: tuple[str, ...]
@@ -217,7 +217,7 @@ class ErrorTables:
     total: ErrorTable
     meta: dict[str, Any] = field(default_factory=dict)
 
-    def __iter__(self):  # type: ignore[no-untyped-def]
+    def __iter__(self) -> Iterator[ErrorTable]:
         return iter((self.projection, self.clustering, self.total))
 
     def to_markdown(self) -> str:

@@ -1,0 +1,201 @@
+"""Where the commands write: checked ``--out`` paths and atomic writes.
+
+* :func:`check_file` / :func:`check_folder` refuse, before any work is done, an output that
+  cannot be written (a parent that is a file, a folder where a file is wanted, an extension
+  whose format the command does not write) or that exists (unless ``--force``).
+* :func:`atomic_file` writes a file to a hidden temporary name in the target's folder and
+  renames it over the target once complete; :func:`atomic_folder` does the same for a whole
+  folder (the report, the demo, the generated experiment). An interrupted run leaves the
+  previous complete output or none (plus a hidden temporary that the next run removes),
+  never a mix of old and half-written files.
+
+A folder written by :func:`atomic_folder` holds a marker file :data:`MARKER`; ``--force``
+replaces only such folders (or empty ones), never a folder of other files.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import re
+import secrets
+import shutil
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+
+from visprim.cli.common import UsageError
+
+#: File naming the command that wrote an output folder.
+MARKER = ".visprim-output"
+#: Extensions that make a new ``--out`` folder look like a file name (a likely mistake).
+_FILE_SUFFIXES = {".html", ".htm", ".png", ".gif", ".pdf", ".csv", ".md", ".npz", ".txt"}
+_TEMP = re.compile(r"^\.(?P<name>.+)\.visprim-(?:tmp|old)-(?P<pid>\d+)-[0-9a-f]+(?:\..*)?$")
+
+
+def _first_existing_parent(path: Path) -> Path:
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    return parent
+
+
+def _check_parent(path: Path, option: str) -> None:
+    parent = _first_existing_parent(path.absolute())
+    if not parent.is_dir():
+        raise UsageError(
+            f"{option} {path}: {parent} is a file, not a folder; choose an --out in a folder"
+        )
+    if not os.access(parent, os.W_OK):
+        raise UsageError(f"{option} {path}: cannot write in {parent}; choose another --out")
+
+
+def check_file(
+    path: str | os.PathLike[str],
+    suffixes: Sequence[str],
+    *,
+    force: bool,
+    option: str = "--out",
+    what: str = "file",
+) -> Path:
+    """``path`` as an output file with one of ``suffixes`` (e.g. ``(".npz",)``)."""
+    p = Path(path)
+    if p.is_dir() or str(path).endswith(("/", os.sep)) or p.name in ("", ".", ".."):
+        example = p / f"{what.split()[0]}{suffixes[0]}"
+        raise UsageError(f"{option} {path} is a folder; give a {what} name such as {example}")
+    if p.suffix.lower() not in suffixes:
+        raise UsageError(
+            f"{option} {path}: the {what} is written as {' or '.join(suffixes)}, not "
+            f"{p.suffix or '(no extension)'}; name it {p.with_suffix(suffixes[0]).name}"
+        )
+    _check_parent(p, option)
+    if p.exists() and not force:
+        raise UsageError(f"{option} {path} exists; pass --force to replace it")
+    return p
+
+
+def check_folder(
+    path: str | os.PathLike[str],
+    *,
+    force: bool,
+    inputs: Sequence[str | os.PathLike[str]] = (),
+    option: str = "--out",
+) -> Path:
+    """``path`` as an output folder (see the module docstring); ``inputs`` are files the
+    command reads, which must not be inside it (replacing the folder would delete them)."""
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise UsageError(f"{option} {path} is a file; give a folder (new, or a previous output)")
+    if not p.exists() and p.suffix.lower() in _FILE_SUFFIXES:
+        raise UsageError(
+            f"{option} {path} names a file, but the output is a folder (index.html and the "
+            f"other files go inside); give a folder name such as {p.with_suffix('')}"
+        )
+    _check_parent(p, option)
+    if p.is_dir() and any(p.iterdir()):
+        if not (p / MARKER).is_file() and not (p / "index.html").is_file():
+            raise UsageError(
+                f"{option} {path} is a folder of other files; give a new or empty folder"
+            )
+        if not force:
+            raise UsageError(
+                f"{option} {path} holds a previous visprim output; pass --force to replace it"
+            )
+        target = p.resolve()
+        for item in inputs:
+            if target in Path(item).resolve().parents:
+                raise UsageError(
+                    f"{option} {path} holds the input {item}, which replacing it would "
+                    "delete; choose another --out"
+                )
+    return p
+
+
+def _hidden(target: Path, kind: str, suffix: str = "") -> Path:
+    token = secrets.token_hex(4)
+    return target.parent / f".{target.name}.visprim-{kind}-{os.getpid()}-{token}{suffix}"
+
+
+def _remove(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path, ignore_errors=True)
+    else:
+        with contextlib.suppress(OSError):
+            path.unlink()
+
+
+def remove_stale(target: Path) -> None:
+    """Remove hidden temporaries of ``target`` left by killed runs (whose process is gone)."""
+    parent = target.parent if str(target.parent) else Path(".")
+    if not parent.is_dir():
+        return
+    for entry in parent.iterdir():
+        m = _TEMP.match(entry.name)
+        if m is None or m["name"] != target.name:
+            continue
+        pid = int(m["pid"])
+        if pid != os.getpid() and _alive(pid):
+            continue
+        _remove(entry)
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+@contextlib.contextmanager
+def atomic_file(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """Yield a temporary path to write; on success it replaces ``path`` in one rename."""
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale(target)
+    tmp = _hidden(target, "tmp", target.suffix)
+    try:
+        yield tmp
+        if not tmp.is_file():
+            raise RuntimeError(f"nothing was written for {target}")
+        with open(tmp, "rb") as fh:
+            os.fsync(fh.fileno())
+        os.replace(tmp, target)
+    finally:
+        _remove(tmp)
+
+
+@contextlib.contextmanager
+def atomic_folder(path: str | os.PathLike[str], command: str) -> Iterator[Path]:
+    """Yield a new hidden folder to fill; on success it replaces the folder ``path``.
+
+    The swap is two renames (old folder → hidden, new → ``path``) and then the removal of
+    the old one: an interruption leaves the previous complete output, or none.
+    """
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale(target)
+    tmp = _hidden(target, "tmp")
+    tmp.mkdir()
+    try:
+        yield tmp
+        (tmp / MARKER).write_text(f"written by visprim {command}\n", encoding="utf-8")
+        old = None
+        if target.exists():
+            old = _hidden(target, "old")
+            os.rename(target, old)
+        os.rename(tmp, target)
+        if old is not None:
+            _remove(old)
+    finally:
+        _remove(tmp)
+
+
+def moved(path: Path, tmp: Path, target: Path) -> Path:
+    """Where ``path`` (written under the temporary folder ``tmp``) is once ``tmp`` became
+    ``target``."""
+    try:
+        return target / path.relative_to(tmp)
+    except ValueError:
+        return path

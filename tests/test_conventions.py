@@ -1,0 +1,106 @@
+"""Project conventions: licence, citation, changelog, one version, tool configuration, CI
+entry point, no issue numbers in code."""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from pathlib import Path
+
+import visprim
+
+REPO = Path(__file__).resolve().parents[1]
+PYPROJECT = tomllib.loads((REPO / "pyproject.toml").read_text(encoding="utf-8"))
+CARGO = tomllib.loads((REPO / "Cargo.toml").read_text(encoding="utf-8"))
+
+
+def text(name: str) -> str:
+    return (REPO / name).read_text(encoding="utf-8")
+
+
+def test_licence_is_mit_everywhere():
+    assert text("LICENSE").startswith("MIT License")
+    assert PYPROJECT["project"]["license"] == {"text": "MIT"}
+    assert CARGO["package"]["license"] == "MIT"
+
+
+def test_version_is_written_once():
+    """Cargo.toml holds the version; pyproject takes it from there (maturin) and
+    visprim.__version__ from the installed metadata (or Cargo.toml in a source tree)."""
+    assert "version" not in PYPROJECT["project"]
+    assert "version" in PYPROJECT["project"]["dynamic"]
+    assert visprim.__version__ == CARGO["package"]["version"]
+    literal = re.compile(r"""__version__\s*(:\s*str\s*)?=\s*["']""")
+    for path in (REPO / "python").rglob("*.py"):
+        assert not literal.search(path.read_text(encoding="utf-8")), path
+    assert not re.search(r"(?m)^version:", text("CITATION.cff"))
+
+
+def test_citation_cites_the_paper_and_the_project():
+    cff = text("CITATION.cff")
+    assert cff.startswith("cff-version: 1.2.0")
+    assert re.search(r"(?m)^title: .*visprim", cff) and re.search(r"(?m)^type: software", cff)
+    assert "preferred-citation:" in cff
+    for needed in (
+        "Automated Derivation of Primitives for Movement Classification",
+        "journal: Autonomous Robots",
+        "volume: 12",
+        "year: 2002",
+        "doi: 10.1023/A:1013254724861",
+        "Visual Primitives for Imitation Learning",
+        "family-names: Fod",
+        "family-names: Jenkins",
+    ):
+        assert needed in cff, needed
+
+
+def test_changelog_has_an_unreleased_section():
+    log = text("CHANGELOG.md")
+    assert log.startswith("# Changelog")
+    assert "## [Unreleased]" in log
+    assert f"## [{CARGO['package']['version']}]" in log
+
+
+def test_mypy_configuration():
+    mypy = PYPROJECT["tool"]["mypy"]
+    assert mypy["files"] == ["python/visprim"]
+    assert "ignore_missing_imports" not in mypy  # never globally
+    ignored = set()
+    for override in mypy["overrides"]:
+        if override.get("ignore_missing_imports"):
+            ignored |= set(override["module"])
+    assert "dartpy" in ignored and ignored <= {"dartpy", "ezc3d"}
+    dev = " ".join(PYPROJECT["project"]["optional-dependencies"]["dev"])
+    for package in ("mypy", "scipy-stubs", "types-tqdm", "sphinx", "numpydoc"):
+        assert package in dev, package
+
+
+def test_ci_runs_tests_lint_and_docs():
+    ci = text(".ci/run")
+    assert re.findall(r"(?m)^make (\w+)$", ci) == ["test", "lint", "docs"]
+    makefile = text("Makefile")
+    lint = re.search(r"(?ms)^lint:.*?(?=^\S)", makefile)
+    docs = re.search(r"(?ms)^docs:.*?(?=^\S)", makefile)
+    assert lint and "mypy" in lint.group(0) and "ruff check" in lint.group(0)
+    assert docs and "sphinx -W" in docs.group(0)
+    assert (REPO / "docs" / "conf.py").is_file()
+
+
+def test_tests_folder_is_plain():
+    assert not (REPO / "tests" / "__init__.py").exists()
+
+
+def test_no_issue_numbers_in_code():
+    pattern = re.compile(r"(?i)\bissues? ?#?\d+")
+    offenders = []
+    for folder, ext in (
+        ("python", "*.py"),
+        ("tests", "*.py"),
+        ("benches", "*.py"),
+        ("rust", "*.rs"),
+    ):
+        for path in (REPO / folder).rglob(ext):
+            for i, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+                if pattern.search(line) and path.name != "test_conventions.py":
+                    offenders.append(f"{path.relative_to(REPO)}:{i}")
+    assert offenders == []
