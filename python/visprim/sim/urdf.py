@@ -129,7 +129,14 @@ def _massless(name: str) -> str:
     )
 
 
-def _joint(name: str, kind: str, parent: str, child: str, xyz: Sequence[float], axis=None) -> str:
+def _joint(
+    name: str,
+    kind: str,
+    parent: str,
+    child: str,
+    xyz: Sequence[float],
+    axis: Sequence[float] | None = None,
+) -> str:
     lines = [
         f"  <joint name={quoteattr(name)} type={quoteattr(kind)}>",
         f"    <parent link={quoteattr(parent)}/>",

@@ -68,7 +68,7 @@ def _gif(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
 
 
 def _mp4(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
-    import imageio_ffmpeg  # type: ignore[import-untyped]
+    import imageio_ffmpeg
 
     writer = None
     n = 0
