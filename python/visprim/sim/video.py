@@ -38,7 +38,7 @@ def check_video_path(path: str | Path) -> Path:
         )
     if ext == ".mp4":
         try:
-            import imageio_ffmpeg  # type: ignore[import-untyped]  # noqa: F401
+            import imageio_ffmpeg  # noqa: F401
         except ImportError:
             raise ImportError(
                 f"{out}: writing .mp4 needs imageio-ffmpeg: pip install 'visprim[video]' "
