@@ -34,7 +34,7 @@ JSON = st.recursive(
 def _tiny_model_file(path: Path) -> Path:
     """A valid model file with d = 8 (n_samples 2), f = 2, k = 2, N = 5 segments."""
     rng = np.random.default_rng(0)
-    params = PrimitiveModel(n_samples=2, n_components=2, n_clusters=2).get_params()
+    params = PrimitiveModel(n_samples=2, n_components=2, n_clusters=2, features="zyz").get_params()
     arrays = {
         "mean": rng.normal(size=8),
         "eigenvalues": np.sort(rng.random(8))[::-1],

@@ -256,9 +256,9 @@ def _parse_time(path: Path, parse: Callable[[Path], object], runs: int) -> float
 def _growth(
     tmp_path: Path, make: Callable[[int], str], parse: Callable[[Path], object], n: int
 ) -> tuple[float, float]:
-    """Parse times of files with n/4 (best of 2) and n elements."""
+    """Parse times (best of 2) of files with n/4 and n elements."""
     times = []
-    for size, runs in ((n // 4, 2), (n, 1)):
+    for size, runs in ((n // 4, 2), (n, 2)):
         path = tmp_path / f"f{size}"
         path.write_text(make(size))
         times.append(_parse_time(path, parse, runs))
