@@ -99,7 +99,7 @@ def run(table: Table, quick: bool = False) -> None:
     n_frames = short.frames.shape[0]
     table.add(
         f"GIF of 1 s ({n_frames} frames, 480x480)",
-        "visprim.sim.render_gif (matplotlib Agg)",
+        "visprim.sim.render_gif (PIL)",
         wall_gif,
         f"{wall_gif / n_frames * 1e3:.1f} ms/frame",
     )

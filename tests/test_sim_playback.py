@@ -82,17 +82,27 @@ def test_generated_strokes_are_tracked() -> None:
 
 
 def test_tight_vicinity_makes_the_set_point_wait() -> None:
-    """A fast stroke and a vicinity smaller than the lag: the sequencer waits at via points
-    (completion later than the trajectory), still reaching each one."""
+    """A fast stroke and a vicinity smaller than the lag of PD without the inverse-dynamics
+    feedforward: the sequencer waits at via points (completion later than the trajectory),
+    still reaching each one."""
     times, angles = minimum_jerk(REACH[:2], [0.35])
-    loose = play(times, angles, vicinity=math.radians(10.0))
-    tight = play(times, angles, vicinity=math.radians(1.5), timeout=1.0)
+    loose = play(times, angles, vicinity=math.radians(10.0), feedforward=False)
+    tight = play(times, angles, vicinity=math.radians(1.5), timeout=1.0, feedforward=False)
     assert loose.completion_time == pytest.approx(loose.movement_duration, abs=0.002)
     assert tight.reached_all
     assert tight.completion_time > loose.completion_time + 0.01
     assert np.any(tight.via_reach_times > tight.via_times + 0.005)
     # While waiting, the set point sits on a via point: some set points repeat.
     assert np.any(np.all(np.diff(tight.q_target, axis=0) == 0, axis=1))
+
+
+def test_inverse_dynamics_feedforward_removes_the_lag() -> None:
+    times, angles = minimum_jerk(REACH[:2], [0.35])
+    plain = play(times, angles, feedforward=False)
+    fed = play(times, angles)
+    assert fed.rms_error_deg < 0.25 * plain.rms_error_deg
+    assert fed.max_error_deg < 1.0 < plain.max_error_deg
+    assert fed.reached_all and fed.completion_time == pytest.approx(fed.movement_duration, abs=2e-3)
 
 
 def test_unreachable_vicinity_times_out() -> None:

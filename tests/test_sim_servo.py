@@ -51,15 +51,18 @@ def test_holds_rest_posture_under_gravity() -> None:
 
 
 def test_holds_outstretched_arm_with_small_gravity_sag() -> None:
-    """Arm forward and horizontal, elbow straight: gravity ~11 N·m on a 600 N·m/rad shoulder."""
+    """Arm forward and horizontal, elbow straight: gravity ~11 N·m on a 600 N·m/rad shoulder.
+    PD alone sags; the inverse-dynamics feedforward compensates gravity."""
     angles = np.tile([0.0, np.pi / 2, 0.0, 0.05], (2, 1))
-    pb = play(np.array([0.0, 2.0]), angles)
+    pb = play(np.array([0.0, 2.0]), angles, feedforward=False)
     shoulder = pb.joint_names.index("r_shoulder")
     sag = pb.joint_errors_deg[-1, shoulder]
     assert 0.3 < sag < 2.0  # present (gravity acts) and small
     # Settled: the last 0.5 s barely moves.
     tail = pb.q_actual[pb.times > 1.5]
     assert np.ptp(tail, axis=0).max() < np.radians(0.05)
+    compensated = play(np.array([0.0, 2.0]), angles)
+    assert compensated.joint_errors_deg[-1, shoulder] < 0.1 * sag
 
 
 def test_gains_table_documented_values_and_coverage() -> None:

@@ -24,7 +24,16 @@ from typing import Any, NoReturn
 from visprim.cli.common import CLIError
 
 #: Command modules of :mod:`visprim.cli`, in help order.
-COMMANDS: tuple[str, ...] = ("demo", "generate", "learn", "report", "classify", "simulate")
+COMMANDS: tuple[str, ...] = (
+    "demo",
+    "generate",
+    "learn",
+    "report",
+    "classify",
+    "simulate",
+    "imitate",
+    "export-robot",
+)
 
 EXIT_ERROR = 1
 EXIT_USAGE = 2
@@ -98,7 +107,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_global_options(parser, top=True)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
-        importlib.import_module(f"visprim.cli.{name}").register(sub)
+        importlib.import_module(f"visprim.cli.{name.replace('-', '_')}").register(sub)
     for p in sub.choices.values():
         _add_global_options(p, top=False)
     return parser

@@ -1,31 +1,34 @@
-"""Headless pictures of a playback: PNG frames and an animated GIF, drawn with matplotlib (Agg).
+"""Headless pictures of a playback: PNG frames and an animated GIF, drawn with PIL.
 
 The stored body transforms of a :class:`visprim.sim.playback.Playback` are projected
 orthographically from a fixed camera (front-right, slightly above, looking at the chest) and
-the shapes of :data:`visprim.sim.model.LINKS` are painted back to front: capsules as thick
-round-capped strokes, boxes as their visible shaded faces, spheres as discs. The right hand's
-target path is drawn dashed with its via points (filled once reached), and the path the hand
-actually took so far as a solid line. No display, OpenGL or X server is needed.
+the shapes of :data:`visprim.sim.model.LINKS` are painted back to front with
+:mod:`PIL.ImageDraw`: capsules as thick round-capped strokes, boxes as their visible shaded
+faces, spheres as discs. Frames are drawn at twice the output size and reduced (a 2×2 box
+filter) for smooth edges. The right hand's target path is drawn dashed with its via points
+(filled once reached), and the path the hand actually took so far as a solid line. No
+display, OpenGL or X server is needed.
+
+:class:`Painter` is the reusable part (projection, body shapes, paths, text);
+:mod:`visprim.sim.video` builds the side-by-side imitation video with it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
-import matplotlib
 import numpy as np
-from matplotlib.axes import Axes
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
-from matplotlib.patches import Circle, Polygon
 from numpy.typing import ArrayLike, NDArray
-from PIL import Image
+from PIL import Image, ImageDraw, ImageFont
 
 from visprim.sim.playback import Playback
 
-matplotlib.rcParams["path.simplify"] = False
+#: Supersampling factor: frames are drawn this many times larger, then reduced.
+SUPERSAMPLE = 2
 
 _BOX_FACES = (  # corner indices (bit 0: +x, bit 1: +y, bit 2: +z), outward normal
     ((0, 2, 6, 4), (-1, 0, 0)),
@@ -36,6 +39,10 @@ _BOX_FACES = (  # corner indices (bit 0: +x, bit 1: +y, bit 2: +z), outward norm
     ((4, 6, 7, 5), (0, 0, 1)),
 )
 _CORNERS = np.array([[(i >> b) & 1 for b in range(3)] for i in range(8)], dtype=np.float64) - 0.5
+_FACE_IDX = np.array([f for f, _ in _BOX_FACES])
+_FACE_NORMALS = np.array([n for _, n in _BOX_FACES], dtype=np.float64)
+
+RGB = tuple[int, int, int]
 
 
 @dataclass(frozen=True)
@@ -63,181 +70,263 @@ class Camera:
         return right, up, back
 
 
-class _Painter:
-    """Draws one frame into an Axes covering the whole figure."""
+def _rgb(color: ArrayLike) -> RGB:
+    c = np.clip(np.asarray(color, dtype=np.float64), 0.0, 1.0)
+    return (int(c[0] * 255 + 0.5), int(c[1] * 255 + 0.5), int(c[2] * 255 + 0.5))
 
-    def __init__(self, camera: Camera, size: tuple[int, int], dpi: float) -> None:
+
+@lru_cache(maxsize=256)
+def _colors(
+    color: tuple[float, float, float], tint: tuple[float, float] | None
+) -> tuple[NDArray[np.float64], RGB, RGB]:
+    """Base colour (float RGB), fill and edge colours (8-bit) of a shape colour."""
+    base = np.asarray(color, dtype=np.float64)
+    if tint is not None:
+        base = base * (1.0 - tint[0]) + tint[1] * tint[0]
+    return base, _rgb(base), _rgb(base * 0.55)
+
+
+@lru_cache(maxsize=8)
+def _font(size: int) -> ImageFont.ImageFont | ImageFont.FreeTypeFont:
+    try:
+        return ImageFont.load_default(size=size)
+    except (TypeError, OSError):  # pragma: no cover - Pillow without FreeType
+        return ImageFont.load_default()
+
+
+class Painter:
+    """Projects world points (metres) into an image of ``size`` pixels and draws on it.
+
+    Drawing happens on a canvas ``SUPERSAMPLE`` times larger; :meth:`finish` returns the
+    reduced image.
+    """
+
+    def __init__(self, camera: Camera, size: tuple[int, int]) -> None:
         self.camera = camera
+        self.size = size
         self.right, self.up, self.back = camera.basis()
-        self.light = self.back * 0.6 + self.up * 0.8
-        self.light /= np.linalg.norm(self.light)
+        light = self.back * 0.6 + self.up * 0.8
+        self.light = light / np.linalg.norm(light)
         w, h = size
+        s = SUPERSAMPLE
+        self.px_per_m = min(w, h) / (2.0 * camera.extent) * s
         centre = np.array([self.right, self.up]) @ np.asarray(camera.target)
-        self.px_per_m = min(w, h) / (2.0 * camera.extent)
-        half = np.array([w, h]) / (2.0 * self.px_per_m)
-        self.xlim = (centre[0] - half[0], centre[0] + half[0])
-        self.ylim = (centre[1] - half[1], centre[1] + half[1])
-        self.pt_per_m = self.px_per_m * 72.0 / dpi
+        self._origin = np.array([w * s / 2.0, h * s / 2.0])
+        self._centre = centre
+        self._proj = np.stack([self.right, -self.up], axis=1) * self.px_per_m
 
-    def project(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
+    def project(self, points: ArrayLike) -> NDArray[np.float64]:
+        """Canvas pixel coordinates (..., 2) of world points (..., 3)."""
         p = np.asarray(points, dtype=np.float64)
-        return np.stack([p @ self.right, p @ self.up], axis=-1)
+        return p @ self._proj - self._centre * np.array([1.0, -1.0]) * self.px_per_m + self._origin
 
-    def depth(self, point: NDArray[np.float64]) -> float:
-        return float(np.asarray(point) @ self.back)
+    def canvas(self, background: RGB = (255, 255, 255)) -> tuple[Image.Image, ImageDraw.ImageDraw]:
+        """A new blank canvas and its drawing context."""
+        w, h = self.size
+        image = Image.new("RGB", (w * SUPERSAMPLE, h * SUPERSAMPLE), background)
+        return image, ImageDraw.Draw(image)
 
-    def shade(self, color: ArrayLike, normal: NDArray[np.float64]) -> NDArray[np.float64]:
-        brightness = 0.55 + 0.45 * max(0.0, float(normal @ self.light))
-        return np.clip(np.asarray(color) * brightness, 0.0, 1.0)
+    def finish(self, image: Image.Image) -> Image.Image:
+        """The canvas reduced to the output size."""
+        return image.reduce(SUPERSAMPLE) if SUPERSAMPLE > 1 else image
 
-    def body_items(self, transform: NDArray[np.float64], shapes: Sequence, items: list) -> None:
-        rot, pos = transform[:3, :3], transform[:3, 3]
-        for spec in shapes:
-            centre = rot @ np.asarray(spec.centre) + pos
-            color = np.asarray(spec.color)
-            if spec.kind == "capsule":
-                r, h = spec.size
-                axis = rot[:, 2] * (h / 2.0)
-                ends = self.project(np.stack([centre - axis, centre + axis]))
-                width = 2.0 * r * self.pt_per_m
-                items.append((self.depth(centre), "capsule", ends, width, color))
-            elif spec.kind == "sphere":
-                (r,) = spec.size
-                items.append((self.depth(centre), "sphere", self.project(centre), r, color))
-            else:
-                corners = (rot @ (_CORNERS * np.asarray(spec.size)).T).T + centre
-                for idx, normal in _BOX_FACES:
-                    n = rot @ np.asarray(normal, dtype=np.float64)
-                    if n @ self.back <= 1e-9:
-                        continue
-                    face = corners[list(idx)]
+    # -------------------------------------------------------------- bodies
+
+    def body_items(
+        self,
+        transforms: NDArray[np.float64],
+        body_shapes: Sequence[Sequence[Any]],
+        tint: tuple[float, float] | None = None,
+    ) -> list[tuple[float, str, Any, float, RGB, RGB]]:
+        """Depth-tagged draw items of bodies at (n, 4, 4) world ``transforms``.
+
+        ``tint = (mix, grey)`` blends every colour towards ``grey`` by ``mix`` (ghosts)."""
+        items: list[tuple[float, str, Any, float, RGB, RGB]] = []
+        back = self.back
+        for tf, shapes in zip(transforms, body_shapes, strict=True):
+            rot, pos = tf[:3, :3], tf[:3, 3]
+            for spec in shapes:
+                centre = rot @ np.asarray(spec.centre) + pos
+                base, fill, edge = _colors(spec.color, tint)
+                depth = float(centre @ back)
+                if spec.kind == "capsule":
+                    r, h = spec.size
+                    axis = rot[:, 2] * (h / 2.0)
+                    ends = self.project(np.stack([centre - axis, centre + axis]))
+                    items.append((depth, "capsule", ends, r * self.px_per_m, fill, edge))
+                elif spec.kind == "sphere":
                     items.append(
-                        (
-                            self.depth(face.mean(axis=0)),
-                            "face",
-                            self.project(face),
-                            None,
-                            self.shade(color, n),
-                        )
-                    )
+                        (depth, "sphere", self.project(centre), spec.size[0] * self.px_per_m,
+                         fill, edge)
+                    )  # fmt: skip
+                else:
+                    corners = (_CORNERS * np.asarray(spec.size)) @ rot.T + centre
+                    normals = _FACE_NORMALS @ rot.T
+                    facing = normals @ back > 1e-9
+                    shade = 0.55 + 0.45 * np.maximum(0.0, normals @ self.light)
+                    for f in np.flatnonzero(facing):
+                        face = corners[_FACE_IDX[f]]
+                        items.append(
+                            (float(face.mean(axis=0) @ back), "face", self.project(face), 0.0,
+                             _rgb(base * shade[f]), edge)
+                        )  # fmt: skip
+        return items
 
-    def draw(self, ax: Axes, items: list) -> None:
-        for z, (_, kind, geom, size, color) in enumerate(sorted(items, key=lambda it: it[0])):
-            zorder = 2 + z * 0.01
-            edge = np.clip(np.asarray(color) * 0.55, 0, 1)
+    @staticmethod
+    def draw_items(draw: ImageDraw.ImageDraw, items: Iterable[tuple]) -> None:
+        """Paint items back to front."""
+        for _, kind, geom, radius, color, edge in sorted(items, key=lambda it: it[0]):
             if kind == "capsule":
-                ax.plot(
-                    geom[:, 0],
-                    geom[:, 1],
-                    color=edge,
-                    lw=size + 1.6,
-                    solid_capstyle="round",
-                    zorder=zorder,
-                )
-                ax.plot(
-                    geom[:, 0],
-                    geom[:, 1],
-                    color=color,
-                    lw=size,
-                    solid_capstyle="round",
-                    zorder=zorder + 0.001,
-                )
+                (x0, y0), (x1, y1) = geom
+                for col, extra in ((edge, 1.6), (color, 0.0)):
+                    r = radius + extra
+                    draw.line((x0, y0, x1, y1), fill=col, width=max(1, int(round(2 * r))))
+                    draw.ellipse((x0 - r, y0 - r, x0 + r, y0 + r), fill=col)
+                    draw.ellipse((x1 - r, y1 - r, x1 + r, y1 + r), fill=col)
             elif kind == "sphere":
-                ax.add_patch(
-                    Circle(
-                        tuple(geom), size, facecolor=color, edgecolor=edge, lw=0.8, zorder=zorder
-                    )
-                )
+                x, y = geom
+                r = radius
+                draw.ellipse((x - r, y - r, x + r, y + r), fill=color, outline=edge, width=2)
             else:
-                ax.add_patch(
-                    Polygon(
-                        geom, closed=True, facecolor=color, edgecolor=edge, lw=0.6, zorder=zorder
-                    )
-                )
+                draw.polygon([tuple(p) for p in geom], fill=color, outline=edge)
+
+    # -------------------------------------------------------------- overlays
+
+    def polyline(
+        self, draw: ImageDraw.ImageDraw, points_2d: NDArray[np.float64], color: RGB, width: float
+    ) -> None:
+        if points_2d.shape[0] >= 2:
+            draw.line([tuple(p) for p in points_2d], fill=color, width=max(1, int(width)))
+
+    @staticmethod
+    def dash_runs(points_2d: NDArray[np.float64], dash: float = 12.0) -> list[list[tuple]]:
+        """The visible runs of a dashed polyline (dash and gap ``dash`` canvas pixels)."""
+        if points_2d.shape[0] < 2:
+            return []
+        seg = np.diff(points_2d, axis=0)
+        arc = np.concatenate([[0.0], np.cumsum(np.hypot(seg[:, 0], seg[:, 1]))])
+        on = (arc // dash).astype(np.int64) % 2 == 0
+        runs, start = [], None
+        for i in range(points_2d.shape[0]):
+            if on[i] and start is None:
+                start = i
+            if (not on[i] or i == points_2d.shape[0] - 1) and start is not None:
+                if i > start:
+                    runs.append([tuple(p) for p in points_2d[start : i + 1]])
+                start = None
+        return runs
+
+    @staticmethod
+    def text(
+        image: Image.Image,
+        xy: tuple[float, float],
+        text: str,
+        size: float = 11,
+        anchor: str = "la",
+        fill: RGB = (20, 20, 20),
+        box: bool = False,
+    ) -> None:
+        """Text on a finished (output-size) image at pixel ``xy``, font ``size`` pixels."""
+        draw = ImageDraw.Draw(image)
+        font = _font(int(round(size)))
+        if box:
+            bbox = draw.textbbox(xy, text, font=font, anchor=anchor)
+            draw.rectangle(
+                (bbox[0] - 3, bbox[1] - 2, bbox[2] + 3, bbox[3] + 3), fill=(255, 255, 255)
+            )
+        draw.text(xy, text, font=font, fill=fill, anchor=anchor)
 
 
-def _frame_drawer(
-    playback: Playback, camera: Camera, size: tuple[int, int], dpi: float, title: str | None
-) -> tuple[Figure, Callable[[int], None]]:
-    fig = Figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
-    FigureCanvasAgg(fig)
-    ax = fig.add_axes((0.0, 0.0, 1.0, 1.0))
-    painter = _Painter(camera, size, dpi)
-    ref_2d = painter.project(playback.hand_reference)
-    via_2d = painter.project(playback.hand_via)
-    path_2d = painter.project(playback.hand_path)
-    footer = (
-        f"RMS {playback.rms_error_deg:.1f}°  max {playback.max_error_deg:.1f}°  "
-        f"{playback.completion_time:.2f} s / {playback.movement_duration:.2f} s  "
-        f"via {playback.n_reached}/{playback.n_via}"
-    )
+class _Label:
+    """A text rendered once and pasted on every frame."""
 
-    def draw(index: int) -> None:
-        ax.clear()
-        ax.set_xlim(*painter.xlim)
-        ax.set_ylim(*painter.ylim)
-        ax.set_aspect("equal")
-        ax.axis("off")
-        fig.set_facecolor("white")
-        items: list = []
-        for tf, shapes in zip(playback.frames[index], playback.body_shapes, strict=True):
-            painter.body_items(tf, shapes, items)
-        painter.draw(ax, items)
-        t = playback.frame_times[index]
-        top = 1000.0
-        ax.plot(
-            ref_2d[:, 0], ref_2d[:, 1], ls=(0, (3, 2)), lw=1.2, color=(0.20, 0.35, 0.85), zorder=top
-        )
-        reached = np.nan_to_num(playback.via_reach_times, nan=np.inf) <= t + 1e-9
-        ax.scatter(
-            via_2d[:, 0],
-            via_2d[:, 1],
-            s=14,
-            zorder=top + 1,
-            facecolors=np.where(reached[:, None], [(0.1, 0.65, 0.2)], [(1.0, 1.0, 1.0)]),
-            edgecolors=(0.1, 0.45, 0.15),
-            linewidths=0.8,
-        )
-        ax.plot(
-            path_2d[: index + 1, 0],
-            path_2d[: index + 1, 1],
-            lw=1.6,
-            color=(0.90, 0.40, 0.05),
-            zorder=top + 2,
-        )
+    def __init__(self, text: str, size: float, anchor: str, xy: tuple[float, float], box: bool):
+        probe = ImageDraw.Draw(Image.new("RGB", (1, 1)))
+        font = _font(int(round(size)))
+        x0, y0, x1, y1 = probe.textbbox((0, 0), text, font=font, anchor="la")
+        pad = 3 if box else 0
+        w, h = int(x1 - x0) + 2 * pad + 1, int(y1 - y0) + 2 * pad + 1
+        self.image = Image.new("RGBA", (w, h), (255, 255, 255, 255 if box else 0))
+        ImageDraw.Draw(self.image).text((pad - x0, pad - y0), text, font=font, fill=(40, 40, 40))
+        x, y = xy
+        x -= {"l": 0, "m": w / 2, "r": w}[anchor[0]]
+        y -= {"a": 0, "m": h / 2, "d": h}[anchor[1]]
+        self.xy = (int(round(x)), int(round(y)))
+
+    def paste(self, image: Image.Image) -> None:
+        image.paste(self.image, self.xy, self.image)
+
+
+class PlaybackDrawer:
+    """Draws frame ``i`` of a playback: bodies, the hand's target path and via points, the
+    path taken so far, title, clock and a footer with the tracking figures."""
+
+    def __init__(
+        self,
+        playback: Playback,
+        camera: Camera,
+        size: tuple[int, int],
+        title: str | None = None,
+        footer: str | None = None,
+    ) -> None:
+        self.playback = playback
+        self.painter = Painter(camera, size)
+        self.title = title
+        p = self.painter
+        w, h = size
+        self.labels = []
         if title:
-            ax.text(0.02, 0.98, title, transform=ax.transAxes, va="top", ha="left", fontsize=9)
-        ax.text(
-            0.98,
-            0.98,
-            f"t = {t:.2f} s",
-            transform=ax.transAxes,
-            va="top",
-            ha="right",
-            fontsize=9,
-            family="monospace",
-        )
-        ax.text(
-            0.5,
-            0.015,
-            footer,
-            transform=ax.transAxes,
-            va="bottom",
-            ha="center",
-            fontsize=7.5,
-            color=(0.2, 0.2, 0.2),
-            zorder=top + 3,
-            bbox={"facecolor": "white", "edgecolor": "none", "alpha": 0.85, "pad": 2},
+            self.labels.append(_Label(title, 11, "la", (4, 4), False))
+        self.ref_2d = p.project(playback.hand_reference)
+        self.ref_runs = p.dash_runs(self.ref_2d, 6.0 * SUPERSAMPLE)
+        self.via_2d = p.project(playback.hand_via)
+        self.path_2d = p.project(playback.hand_path)
+        self.footer = (
+            footer
+            if footer is not None
+            else (
+                f"RMS {playback.rms_error_deg:.1f}°  max {playback.max_error_deg:.1f}°  "
+                f"{playback.completion_time:.2f} s / {playback.movement_duration:.2f} s  "
+                f"via {playback.n_reached}/{playback.n_via}"
+            )
         )
 
-    return fig, draw
+        if self.footer:
+            self.labels.append(_Label(self.footer, 9.5, "md", (w / 2, h - 3), True))
+        # Bodies that never move (the pelvis and legs) are projected once.
+        frames = playback.frames
+        still = np.abs(frames - frames[:1]).max(axis=(0, 2, 3)) < 1e-12
+        self.moving = np.flatnonzero(~still)
+        self.static_items = p.body_items(
+            frames[0][still], [s for s, k in zip(playback.body_shapes, still, strict=True) if k]
+        )
+        self.moving_shapes = [playback.body_shapes[i] for i in self.moving]
 
-
-def _to_image(fig: Figure) -> Image.Image:
-    canvas = fig.canvas
-    canvas.draw()
-    rgba = np.asarray(canvas.buffer_rgba())  # type: ignore[attr-defined]
-    return Image.fromarray(rgba[..., :3].copy())
+    def draw(self, index: int, clock: float | None = None) -> Image.Image:
+        """Frame ``index`` as an RGB image; ``clock`` (s) overrides the time shown."""
+        pb, p = self.playback, self.painter
+        image, draw = p.canvas()
+        items = p.body_items(pb.frames[index][self.moving], self.moving_shapes)
+        p.draw_items(draw, items + self.static_items)
+        s = SUPERSAMPLE
+        for run in self.ref_runs:
+            draw.line(run, fill=(51, 89, 217), width=max(1, int(1.2 * s)))
+        t = pb.frame_times[index]
+        reached = np.nan_to_num(pb.via_reach_times, nan=np.inf) <= t + 1e-9
+        r = 2.2 * s
+        for (x, y), hit in zip(self.via_2d, reached, strict=True):
+            draw.ellipse(
+                (x - r, y - r, x + r, y + r),
+                fill=(26, 166, 51) if hit else (255, 255, 255),
+                outline=(26, 115, 38),
+                width=max(1, s),
+            )
+        p.polyline(draw, self.path_2d[: index + 1], (230, 102, 13), 1.6 * s)
+        out = p.finish(image)
+        for label in self.labels:
+            label.paste(out)
+        p.text(out, (p.size[0] - 4, 4), f"t = {t if clock is None else clock:.2f} s", 11, "ra")
+        return out
 
 
 def _check_size(size: tuple[int, int]) -> tuple[int, int]:
@@ -255,7 +344,6 @@ def render_png(
     size: tuple[int, int] = (480, 480),
     camera: Camera | None = None,
     title: str | None = None,
-    dpi: float = 100.0,
 ) -> Path:
     """Write one frame (index into ``playback.frame_times``; default the last) as a PNG.
 
@@ -265,10 +353,9 @@ def render_png(
     if not -n <= frame < n:
         raise ValueError(f"frame must index one of the {n} stored frames, got {frame}")
     out = Path(path)
+    drawer = PlaybackDrawer(playback, camera or Camera(), _check_size(size), title)
     out.parent.mkdir(parents=True, exist_ok=True)
-    fig, draw = _frame_drawer(playback, camera or Camera(), _check_size(size), dpi, title)
-    draw(frame % n)
-    _to_image(fig).save(out, format="PNG")
+    drawer.draw(frame % n).save(out, format="PNG")
     return out
 
 
@@ -280,33 +367,33 @@ def render_gif(
     size: tuple[int, int] = (480, 480),
     camera: Camera | None = None,
     title: str | None = None,
-    dpi: float = 100.0,
     png_dir: str | Path | None = None,
 ) -> Path:
     """Write an animated GIF of the playback: one image per stored frame, looping.
 
     ``fps`` (Hz) is the GIF's frame rate; by default ``playback.render_fps``, i.e. real time
     (GIF delays are whole centiseconds). With ``png_dir`` every frame is also written there as
-    ``frame_0000.png``, .... Returns the path written (parent folders are created).
+    ``frame_0000.png``, .... Returns the path written (parent folders are created); the GIF
+    is written atomically.
     """
+    from visprim.sim.video import write_video
+
     rate = playback.render_fps if fps is None else float(fps)
     if not (np.isfinite(rate) and rate > 0):
         raise ValueError(f"fps must be > 0 Hz, got {fps}")
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    drawer = PlaybackDrawer(playback, camera or Camera(), _check_size(size), title)
     frames_dir = Path(png_dir) if png_dir is not None else None
     if frames_dir is not None:
         frames_dir.mkdir(parents=True, exist_ok=True)
-    fig, draw = _frame_drawer(playback, camera or Camera(), _check_size(size), dpi, title)
-    images = []
-    for i in range(playback.frames.shape[0]):
-        draw(i)
-        image = _to_image(fig)
-        if frames_dir is not None:
-            image.save(frames_dir / f"frame_{i:04d}.png", format="PNG")
-        images.append(image.convert("P", palette=Image.Palette.ADAPTIVE, colors=128))
-    duration = max(10, int(round(1000.0 / rate / 10.0)) * 10)
-    images[0].save(
-        out, format="GIF", save_all=True, append_images=images[1:], duration=duration, loop=0
-    )
-    return out
+
+    def frames() -> Iterable[Image.Image]:
+        for i in range(playback.frames.shape[0]):
+            image = drawer.draw(i)
+            if frames_dir is not None:
+                image.save(frames_dir / f"frame_{i:04d}.png", format="PNG")
+            yield image
+
+    out = Path(path)
+    if out.suffix.lower() != ".gif":
+        raise ValueError(f"render_gif writes .gif files, got {out.name!r}")
+    return write_video(out, frames(), rate)

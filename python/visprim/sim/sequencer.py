@@ -35,6 +35,11 @@ from visprim.arm import shoulder_rotation_body
 #: Joints driven by the method's 4 angles: (ball joint, revolute joint).
 SHOULDER_JOINT = "r_shoulder"
 ELBOW_JOINT = "r_elbow"
+#: The left arm's joints, driven by columns 4-7 of a two-arm (T, 8) angle array.
+LEFT_SHOULDER_JOINT = "l_shoulder"
+LEFT_ELBOW_JOINT = "l_elbow"
+#: Reflection through the sagittal plane (y → −y): maps the right arm onto the left.
+MIRROR = np.diag([1.0, -1.0, 1.0])
 
 
 def validate_trajectory(
@@ -45,10 +50,10 @@ def validate_trajectory(
     a = np.asarray(angles, dtype=np.float64)
     if t.ndim != 1 or t.shape[0] < 2:
         raise ValueError(f"times must be a 1-D array of at least 2 seconds values, got {t.shape}")
-    if a.shape != (t.shape[0], 4):
+    if a.ndim != 2 or a.shape[0] != t.shape[0] or a.shape[1] not in (4, 8):
         raise ValueError(
             f"angles must have shape (T, 4) = ({t.shape[0]}, 4) radians (gamma, beta, alpha, "
-            f"elbow), got {a.shape}"
+            f"elbow of the right arm) or (T, 8) (then the left arm's), got {a.shape}"
         )
     if not np.all(np.isfinite(t)):
         raise ValueError("times contain NaN or infinity")
@@ -61,47 +66,76 @@ def validate_trajectory(
     return t, a
 
 
-def arm_dof_indices(skeleton: dart.dynamics.Skeleton) -> tuple[slice, int]:
-    """Skeleton DOF indices of the right shoulder (a slice of 3) and the right elbow."""
-    shoulder = skeleton.getJoint(SHOULDER_JOINT)
-    elbow = skeleton.getJoint(ELBOW_JOINT)
+def arm_dof_indices(skeleton: dart.dynamics.Skeleton, side: str = "right") -> tuple[slice, int]:
+    """Skeleton DOF indices of one arm's shoulder (a slice of 3) and elbow."""
+    names = (
+        (SHOULDER_JOINT, ELBOW_JOINT)
+        if side == "right"
+        else (LEFT_SHOULDER_JOINT, LEFT_ELBOW_JOINT)
+    )
+    shoulder = skeleton.getJoint(names[0])
+    elbow = skeleton.getJoint(names[1])
     if shoulder is None or elbow is None:
         raise ValueError(
-            f"skeleton {skeleton.getName()!r} has no joints {SHOULDER_JOINT!r} and {ELBOW_JOINT!r}"
+            f"skeleton {skeleton.getName()!r} has no joints {names[0]!r} and {names[1]!r}"
         )
     start = shoulder.getIndexInSkeleton(0)
     return slice(start, start + 3), elbow.getIndexInSkeleton(0)
 
 
+def _arms(a: NDArray[np.float64]) -> list[tuple[str, NDArray[np.float64]]]:
+    """(side, (T, 4) angles) of each arm in a (T, 4) or (T, 8) array."""
+    if a.shape[1] == 4:
+        return [("right", a)]
+    if a.shape[1] == 8:
+        return [("right", a[:, :4]), ("left", a[:, 4:])]
+    raise ValueError(f"angles must have 4 (right arm) or 8 (both arms) columns, got {a.shape}")
+
+
 def angles_to_positions(skeleton: dart.dynamics.Skeleton, angles: ArrayLike) -> NDArray[np.float64]:
-    """Full joint positions (T, n_dofs) for (T, 4) arm angles in radians; rest elsewhere."""
+    """Full joint positions (T, n_dofs) for arm angles in radians; rest elsewhere.
+
+    ``angles`` is (T, 4) for the right arm or (T, 8) for right then left. The left arm's
+    angles mean the mirror image (through the sagittal plane) of the same right-arm angles:
+    its shoulder rotation is ``P R P`` with ``P = diag(1, −1, 1)``, its elbow the same flexion.
+    """
     a = np.atleast_2d(np.asarray(angles, dtype=np.float64))
-    sh, el = arm_dof_indices(skeleton)
     q = np.zeros((a.shape[0], skeleton.getNumDofs()))
-    q[:, sh] = Rotation.from_matrix(shoulder_rotation_body(a)).as_rotvec()
-    q[:, el] = a[:, 3]
+    for side, arm in _arms(a):
+        sh, el = arm_dof_indices(skeleton, side)
+        rot = shoulder_rotation_body(arm)
+        if side == "left":
+            rot = MIRROR @ rot @ MIRROR
+        q[:, sh] = Rotation.from_matrix(rot).as_rotvec()
+        q[:, el] = arm[:, 3]
     return q
 
 
 def positions_to_angles(
-    skeleton: dart.dynamics.Skeleton, positions: ArrayLike
+    skeleton: dart.dynamics.Skeleton, positions: ArrayLike, n_arms: int = 1
 ) -> NDArray[np.float64]:
-    """The method's 4 angles (T, 4) radians from joint positions (T, n_dofs).
+    """The method's angles (T, 4 n_arms) radians from joint positions (T, n_dofs).
 
     Inverse of :func:`angles_to_positions` for β in (0, π); at β = 0 (Z-Y-Z singularity) the
     split between γ and α is arbitrary (α = 0 is returned).
     """
     q = np.atleast_2d(np.asarray(positions, dtype=np.float64))
-    sh, el = arm_dof_indices(skeleton)
-    m = np.diag([1.0, -1.0, -1.0])
-    r = m @ Rotation.from_rotvec(q[:, sh]).as_matrix() @ m  # shoulder frame S
-    beta = np.arccos(np.clip(r[:, 2, 2], -1.0, 1.0))
-    gamma = np.arctan2(r[:, 1, 2], r[:, 0, 2])
-    alpha = np.arctan2(r[:, 2, 1], -r[:, 2, 0])
-    flat = np.sin(beta) < 1e-9
-    gamma[flat] = np.arctan2(r[flat, 1, 0], r[flat, 0, 0])
-    alpha[flat] = 0.0
-    return np.stack([gamma, beta, alpha, q[:, el]], axis=1)
+    out = []
+    for side in ("right", "left")[:n_arms]:
+        sh, el = arm_dof_indices(skeleton, side)
+        rot = Rotation.from_rotvec(q[:, sh]).as_matrix()
+        if side == "left":
+            rot = MIRROR @ rot @ MIRROR
+        m = np.diag([1.0, -1.0, -1.0])
+        r = m @ rot @ m  # shoulder frame S
+        beta = np.arccos(np.clip(r[:, 2, 2], -1.0, 1.0))
+        gamma = np.arctan2(r[:, 1, 2], r[:, 0, 2])
+        alpha = np.arctan2(r[:, 2, 1], -r[:, 2, 0])
+        flat = np.sin(beta) < 1e-9
+        gamma[flat] = np.arctan2(r[flat, 1, 0], r[flat, 0, 0])
+        alpha[flat] = 0.0
+        out.append(np.stack([gamma, beta, alpha, q[:, el]], axis=1))
+    return np.concatenate(out, axis=1)
 
 
 def shoulder_angular_velocity(angles: ArrayLike, rates: ArrayLike) -> NDArray[np.float64]:
@@ -158,7 +192,8 @@ def build_reference(
     dt: float,
     via_spacing: float = 0.1,
 ) -> Reference:
-    """Sample a (T, 4) angle trajectory (``times`` seconds, any origin) on the control grid.
+    """Sample a (T, 4) or two-arm (T, 8) angle trajectory (``times`` seconds, any origin) on
+    the control grid.
 
     Via points every ``via_spacing`` seconds (at least one: the end point).
     """
@@ -174,9 +209,13 @@ def build_reference(
     a_grid = spline(grid)
     q = angles_to_positions(skeleton, a_grid)
     v = np.zeros_like(q)
-    sh, el = arm_dof_indices(skeleton)
-    v[:, sh] = shoulder_angular_velocity(a_grid, spline(grid, 1))
-    v[:, el] = spline(grid, 1)[:, 3]
+    rates = spline(grid, 1)
+    for (side, arm), (_, rate) in zip(_arms(a_grid), _arms(rates), strict=True):
+        sh, el = arm_dof_indices(skeleton, side)
+        omega = shoulder_angular_velocity(arm, rate)
+        # A reflection turns an angular velocity (a pseudo-vector) w into -P w.
+        v[:, sh] = -omega @ MIRROR if side == "left" else omega
+        v[:, el] = rate[:, 3]
     stride = max(1, int(round(via_spacing / dt)))
     via = np.arange(stride, n_steps, stride, dtype=np.int64)
     if via.size and n_steps - via[-1] < stride // 2:

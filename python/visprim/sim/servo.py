@@ -16,6 +16,10 @@ stable-PD solve with the full mass matrix), and the explicit remainder
 diverges at Δt = 1 ms on the hands (the wrist's damping ``kd Δt`` exceeds twice the hand's
 inertia about its long axis, 3.4e-4 kg·m²); stable PD does not.
 
+:func:`visprim.sim.playback.play` adds the inverse dynamics of the trajectory as feedforward
+(the torques that perform it exactly), so the PD only corrects the residual; the law itself
+is unchanged.
+
 For a ball joint the position error ``θd − θ`` is the rotation vector of ``R(θ)ᵀ R(θd)``
 (DART's ``getPositionDifferences``: the geodesic error in the child frame, the frame of the
 joint's angular velocity), not a difference of coordinates.
@@ -136,6 +140,38 @@ class StablePD:
         for zero). The implicit damping ``−kd θ̇ₙ₊₁`` is added by DART.
         """
         tau = self.kp * error - self._kp_dt * velocity
+        if target_velocity is not None:
+            tau += self.kd * target_velocity
+        return tau
+
+
+class ExplicitPD:
+    """The method's PD law, eq. (1), evaluated explicitly:
+    ``τ = kp (θd ⊖ θ) + kd (θ̇d − θ̇)`` with the current state (N·m).
+
+    Construction removes the joints' damping and springs (the whole law is in the forces).
+    Explicit damping is stable only while ``kd Δt`` stays below about twice the smallest
+    inertia a joint moves; :mod:`benches.bench_servo` measures the largest step it tolerates.
+    """
+
+    def __init__(
+        self, skeleton: dart.dynamics.Skeleton, gains: dict[str, JointGains] | None = None
+    ) -> None:
+        self.skeleton = skeleton
+        self.kp, self.kd = gains_per_dof(skeleton, gains)
+        for i in range(skeleton.getNumDofs()):
+            dof = skeleton.getDof(i)
+            dof.setDampingCoefficient(0.0)
+            dof.setSpringStiffness(0.0)
+
+    def forces(
+        self,
+        error: NDArray[np.float64],
+        velocity: NDArray[np.float64],
+        target_velocity: NDArray[np.float64] | None,
+    ) -> NDArray[np.float64]:
+        """Joint forces (N·m): ``error`` = ``θd ⊖ θ`` (rad), velocities in rad/s."""
+        tau = self.kp * error - self.kd * velocity
         if target_velocity is not None:
             tau += self.kd * target_velocity
         return tau

@@ -14,7 +14,8 @@ def minimum_jerk(
     Parameters
     ----------
     postures : (n, 4) array, radians
-        Successive arm postures (γ, β, α, elbow) of :mod:`visprim.arm`; n >= 2.
+        Successive arm postures (γ, β, α, elbow) of :mod:`visprim.arm`; n >= 2. (n, 8) for
+        both arms (right, then left).
     durations : (n - 1,) array, seconds
         Duration of each stroke, > 0.
     rate : float, Hz
@@ -22,12 +23,14 @@ def minimum_jerk(
 
     Returns
     -------
-    times : (T,) seconds from 0; angles : (T, 4) radians.
+    times : (T,) seconds from 0; angles : (T, 4) (or (T, 8)) radians.
     """
     p = np.asarray(postures, dtype=np.float64)
     d = np.atleast_1d(np.asarray(durations, dtype=np.float64))
-    if p.ndim != 2 or p.shape[1] != 4 or p.shape[0] < 2:
-        raise ValueError(f"postures must have shape (n >= 2, 4) radians, got {p.shape}")
+    if p.ndim != 2 or p.shape[1] not in (4, 8) or p.shape[0] < 2:
+        raise ValueError(
+            f"postures must have shape (n >= 2, 4) radians (or (n, 8) for two arms), got {p.shape}"
+        )
     if d.shape != (p.shape[0] - 1,) or not np.all(np.isfinite(d)) or np.any(d <= 0):
         raise ValueError(
             f"durations must be {p.shape[0] - 1} positive seconds values, got {d.tolist()}"

@@ -1,0 +1,106 @@
+"""``visprim imitate``: a recording → its primitives → Adonis, measured against the human."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from visprim.cli import common, outputs
+
+
+def run(args: argparse.Namespace) -> int:
+    """``visprim imitate MODEL RECORDING --out DIR``; see :mod:`visprim.imitate`."""
+    from visprim.progress import stages
+    from visprim.sim.video import VIDEO_FORMATS, check_video_path
+
+    for what, path in (("model file", args.model), ("recording", args.recording)):
+        if not Path(path).is_file():
+            raise common.UsageError(f"{what} {path!r} not found")
+    video = None if args.no_video else args.video
+    if video is not None:
+        try:
+            check_video_path(video)
+        except ValueError:
+            raise common.UsageError(
+                f"--video {video}: unsupported video format; name it .gif or .mp4 "
+                f"({', '.join(f'{e}: {w}' for e, w in VIDEO_FORMATS.items())})"
+            ) from None
+    out = outputs.check_folder(args.out, force=args.force, inputs=[args.model, args.recording])
+    dt = args.dt if args.dt is not None else (0.001 if args.servo == "stable" else 0.0001)
+    from visprim.imitate import imitate, write_imitation
+    from visprim.io import read
+
+    with stages(4, "imitate") as progress:
+        progress.step("loading")
+        model = common.load_model(args.model)
+        opts = common.reader_options(args)
+        arm = opts.pop("arm")
+        if len(getattr(model, "arms_", ("right",))) == 2:
+            arm = "both"  # a two-arm model imitates both arms of the recording
+        trial = read(args.recording, arm, **opts)
+        progress.step(f"segmenting, rebuilding, playing {trial.duration:.1f} s on Adonis")
+        result = imitate(model, trial, source=args.source, servo=args.servo, dt=dt)
+        progress.step("writing files" + (" and the video" if video else ""))
+        with outputs.atomic_folder(out, "imitate") as tmp:
+            written = write_imitation(
+                result,
+                tmp,
+                video=video,
+                size=(args.size, args.size),
+                extra={"model": str(Path(args.model).resolve())},
+            )
+        progress.step("done")
+    print(result.summary())
+    for kind, path in written.items():
+        print(f"wrote {outputs.moved(path, tmp, out)} ({kind})")
+    return 0
+
+
+def register(sub: Any) -> None:
+    """Add the command to ``sub`` (from :meth:`argparse.ArgumentParser.add_subparsers`)."""
+    p = sub.add_parser(
+        "imitate",
+        help="imitate a recording through the model's primitives on Adonis",
+        description=(
+            "Resample RECORDING to the model's frame period, segment it, take each segment's "
+            "nearest primitive, rebuild the movement from the primitives' centres (joined with "
+            "no step in angle or velocity), play it on Adonis and compare with the human. "
+            "Writes imitation.json (metrics), imitation.csv (trajectories), trajectory.json/"
+            ".csv (URDF joint trajectory of the rebuild) and a video into DIR."
+        ),
+    )
+    p.add_argument("model", help="model file written by `visprim learn`")
+    p.add_argument("recording", help="a recording (.bvh, .amc, .c3d, marker .csv)")
+    p.add_argument("--out", required=True, help="output folder")
+    p.add_argument(
+        "--source",
+        choices=("primitives", "projection"),
+        default="primitives",
+        help="rebuild from the primitives (default) or, as a labelled near-copy, from each "
+        "segment's own projection",
+    )
+    p.add_argument(
+        "--servo",
+        choices=("stable", "paper"),
+        default="stable",
+        help="stable PD along the trajectory with inverse-dynamics feedforward (default) or "
+        "the paper's explicit PD with via-point switching",
+    )
+    p.add_argument(
+        "--dt",
+        type=float,
+        default=None,
+        help="simulation step, s (default 0.001; 0.0001 with --servo paper, whose explicit "
+        "damping diverges at 1 ms)",
+    )
+    p.add_argument(
+        "--video",
+        default="imitation.gif",
+        help="video file name in DIR: .gif, or .mp4 with visprim[video] (default imitation.gif)",
+    )
+    p.add_argument("--no-video", action="store_true", help="write no video")
+    p.add_argument("--size", type=int, default=480, help="panel size in pixels (default 480)")
+    common.add_force_option(p)
+    common.add_reader_options(p, many=False)
+    p.set_defaults(func=run)

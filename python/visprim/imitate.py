@@ -1,0 +1,629 @@
+"""Imitation: a recording → its primitives → Adonis, measured against the human.
+
+:func:`imitate` runs the chain of the method on one recording with a fitted
+:class:`~visprim.model.PrimitiveModel`:
+
+1. the recording is resampled to the model's frame period (the one ``learn`` used, see
+   :func:`model_frame_period`), so that it is filtered and segmented like the training data;
+2. it is segmented with the model's settings (:meth:`PrimitiveModel.prepare`: inverse
+   kinematics, zero-phase low-pass, SEG-2 with the fitted constant, or SEG-1);
+3. each segment is projected and assigned its nearest primitive
+   (:meth:`~PrimitiveModel.transform`, :meth:`~PrimitiveModel.assign`);
+4. the movement is rebuilt from the primitives' **centres** (``source="primitives"``), each
+   curve stretched to its segment's duration with the segment's whole-turn offsets of γ and α
+   added back, and the segments joined with no step in value or velocity
+   (:class:`visprim.sim.joining.JoinedTrajectory`), in the model's description
+   (:mod:`visprim.features`: Z-Y-Z angles, or unit bone directions then turned into angles by
+   inverse kinematics, :class:`Rebuild`). ``source="projection"`` rebuilds each
+   segment from its own f-D projection instead: a near-copy of the human, not an imitation
+   through primitives, reported as such;
+5. the rebuild is played on Adonis (:func:`visprim.sim.play`, stable PD or the paper's servo;
+   both arms for a two-arm model, whose recordings are read with ``arm="both"``).
+
+What the human did is the low-passed IK angles of the recording (what the method sees).
+Errors (:class:`Imitation.metrics`, degrees) are taken at the recording's frames that a
+segment covers:
+
+* rebuild vs human, RMS per angle (γ, β, α, elbow; γ and α modulo whole turns) and over the
+  four;
+* in joint space, for rebuild vs human, Adonis vs human and Adonis vs rebuild: the shoulder's
+  geodesic angle (the rotation between two shoulder orientations, free of the Z-Y-Z
+  singularity) and the elbow's difference, RMS of each and over both. Adonis is compared at
+  the same clock: recording time ``t`` against the simulation ``t − start`` seconds after the
+  first segment started, so a robot that falls behind is charged for it.
+
+Coverage: the parts of the recording before the first segment, after the last and between
+segments are listed (seconds and percent of the recording); nothing is dropped silently.
+Gaps between segments are bridged smoothly in the rebuild and played.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
+
+from visprim.arm import ANGLE_NAMES, shoulder_rotation_body
+from visprim.sim.joining import JoinedTrajectory
+from visprim.trial import Trial
+
+Source = Literal["primitives", "projection"]
+Servo = Literal["stable", "paper"]
+
+#: How each rebuild source is labelled in reports.
+SOURCE_LABELS: dict[str, str] = {
+    "primitives": "rebuilt from the nearest primitives' centres (imitation through primitives)",
+    "projection": (
+        "NEAR-COPY: each segment from its own PCA projection, not from primitives "
+        "(an upper bound on what the primitives could do)"
+    ),
+}
+#: Default frame period (s) for a model that does not record one (the study's 34 ms).
+DEFAULT_PERIOD_S = 0.034
+#: Spacing (s) of the rebuild samples handed to the simulation.
+PLAY_SAMPLE_S = 0.005
+
+__all__ = ["Imitation", "Rebuild", "human_arm_points", "imitate", "model_frame_period"]
+
+
+def model_frame_period(model: Any) -> float | None:
+    """The frame period (s) recordings are resampled to for ``model``: the one recorded by
+    ``visprim learn`` (None: the files' own rate), else 34 ms."""
+    period = (getattr(model, "training_source_", None) or {}).get("resample", DEFAULT_PERIOD_S)
+    return None if period is None else float(period)
+
+
+@dataclass(eq=False)
+class Imitation:
+    """Result of :func:`imitate`. Seconds on the recording's clock, radians unless ``_deg``.
+
+    Attributes
+    ----------
+    name : str — the recording's name.
+    source : "primitives" or "projection" — what the rebuild is made of.
+    trial : Trial — the recording as imitated (resampled to the model's period).
+    times : (F,) s — its frame times.
+    human : (F, 4) rad — low-passed IK angles (γ, β, α, elbow).
+    segments : (N, 2) s — ``[start, end]`` of each segment.
+    primitives : (N,) int — nearest primitive of each segment.
+    distances : (N,) rad — distance of each segment's projection to that primitive's centre.
+    segment_of_frame : (F,) int — segment index of each frame, -1 where none covers it.
+    rebuild : Rebuild — the joined rebuild (call it with times for angles, velocities).
+    rebuild_angles, rebuild_velocities : (F, 4) — the rebuild at the frames inside
+        ``[segments[0, 0], segments[-1, 1]]`` (NaN outside).
+    adonis_angles : (F, 4) or None — Adonis's arm angles at the same clock (NaN outside the
+        played span; γ and α on the human's branch).
+    playback : Playback or None — the simulation (None with ``play=False``).
+    metrics : dict — every figure of the module docstring (JSON-ready).
+    """
+
+    name: str
+    source: str
+    trial: Trial
+    times: NDArray[np.float64]
+    human: NDArray[np.float64]
+    segments: NDArray[np.float64]
+    primitives: NDArray[np.int64]
+    distances: NDArray[np.float64]
+    segment_of_frame: NDArray[np.int64]
+    rebuild: Rebuild
+    rebuild_angles: NDArray[np.float64]
+    rebuild_velocities: NDArray[np.float64]
+    adonis_angles: NDArray[np.float64] | None
+    playback: Any
+    metrics: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def covered(self) -> NDArray[np.bool_]:
+        """(F,) whether a segment covers each frame."""
+        return self.segment_of_frame >= 0
+
+    def summary(self) -> str:
+        """A few lines for the terminal."""
+        m = self.metrics
+        rb = m["rebuild_vs_human_rms_deg"]
+        lines = [
+            f"{self.name}: {len(self.primitives)} segments -> primitives "
+            f"{' '.join(str(int(k)) for k in self.primitives)}",
+            f"  rebuild: {SOURCE_LABELS[self.source]}",
+            "  rebuild vs human RMS (deg): "
+            + ", ".join(f"{a} {rb[a]:.2f}" for a in channel_names(self.human.shape[1]))
+            + f"; overall {rb['overall']:.2f}",
+        ]
+        cov = m["coverage"]
+        lines.append(
+            f"  coverage: {cov['covered_s']:.2f} s of {m['human_duration_s']:.2f} s; "
+            f"uncovered {cov['uncovered_s']:.2f} s ({cov['uncovered_percent']:.1f} %)"
+            + "".join(
+                f"\n    uncovered {u['start_s']:.3f}-{u['end_s']:.3f} s ({u['duration_s']:.3f} s)"
+                for u in cov["uncovered"]
+            )
+        )
+        if "adonis" in m:
+            a = m["adonis"]
+            j = m["rebuild_vs_human_joint_rms_deg"]
+            vs_human = a["vs_human_joint_rms_deg"]["overall"]
+            vs_rebuild = a["vs_rebuild_joint_rms_deg"]["overall"]
+            lines.append(
+                f"  joint-space RMS (deg, shoulder geodesic + elbow): rebuild vs human "
+                f"{j['overall']:.2f}; Adonis vs human {vs_human:.2f}; "
+                f"Adonis vs rebuild {vs_rebuild:.2f}"
+            )
+            lines.append(
+                f"  Adonis ({a['servo']} servo): completed in {a['completion_time_s']:.2f} s; "
+                f"{a['time_ratio']:.2f}x the human's covered {m['covered_span_s']:.2f} s, "
+                f"{a['time_ratio_full']:.2f}x the whole recording; via points "
+                f"{a['via_reached']}/{a['via_points']}"
+            )
+        return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------- helpers
+
+
+def _rms_deg(x: NDArray[np.float64], axis: int | None = 0) -> Any:
+    return np.degrees(np.sqrt(np.mean(np.square(x), axis=axis)))
+
+
+def _geodesic(ra: NDArray[np.float64], rb: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Angle (rad) of the rotation between two stacks of (T, 3, 3) rotation matrices."""
+    rel = Rotation.from_matrix(ra).inv() * Rotation.from_matrix(rb)
+    return np.asarray(rel.magnitude(), dtype=np.float64)
+
+
+def channel_names(n_channels: int) -> tuple[str, ...]:
+    """Names of the angle columns: γ, β, α, elbow of the right arm (4), or ``right_*`` then
+    ``left_*`` (8)."""
+    if n_channels == 4:
+        return ANGLE_NAMES
+    if n_channels == 8:
+        return tuple(f"{side}_{a}" for side in ("right", "left") for a in ANGLE_NAMES)
+    raise ValueError(f"expected 4 (one arm) or 8 (two arms) angle columns, got {n_channels}")
+
+
+def joint_space_errors(
+    a: NDArray[np.float64], b: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Shoulder geodesic angles and elbow differences (rad) between two (T, 4) or (T, 8)
+    angle arrays (see the module docstring), each (T * n_arms,): all arms stacked."""
+    shoulders, elbows = [], []
+    for c in range(0, a.shape[1], 4):
+        # The left arm's mirror convention is a conjugation: it leaves geodesic angles alone.
+        shoulders.append(
+            _geodesic(
+                shoulder_rotation_body(a[:, c : c + 3]), shoulder_rotation_body(b[:, c : c + 3])
+            )
+        )
+        elbows.append(np.abs(a[:, c + 3] - b[:, c + 3]))
+    return np.concatenate(shoulders), np.concatenate(elbows)
+
+
+def _joint_rms(shoulder: NDArray[np.float64], elbow: NDArray[np.float64]) -> dict[str, float]:
+    return {
+        "shoulder": float(_rms_deg(shoulder)),
+        "elbow": float(_rms_deg(elbow)),
+        "overall": float(_rms_deg(np.concatenate([shoulder, elbow]))),
+    }
+
+
+def _angle_rms(diff: NDArray[np.float64]) -> dict[str, float]:
+    """RMS per angle column (degrees) of differences (rad); γ and α, angles about an
+    unbounded axis, are compared modulo whole turns (wrapped into (−π, π])."""
+    diff = diff.copy()
+    for c in range(0, diff.shape[1], 4):
+        for k in (c, c + 2):
+            diff[:, k] = np.angle(np.exp(1j * diff[:, k]))
+    names = channel_names(diff.shape[1])
+    out = {name: float(v) for name, v in zip(names, _rms_deg(diff), strict=True)}
+    out["overall"] = float(_rms_deg(diff, axis=None))
+    return out
+
+
+def _same_branch(
+    angles: NDArray[np.float64], reference: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """γ and α of ``angles`` moved by whole turns to lie nearest ``reference``."""
+    out = angles.copy()
+    for c in range(0, angles.shape[1], 4):
+        for k in (c, c + 2):
+            out[:, k] += 2 * np.pi * np.round((reference[:, k] - angles[:, k]) / (2 * np.pi))
+    return out
+
+
+def human_arm_points(trial: Trial) -> NDArray[np.float64]:
+    """The recorded arm(s) as (T, 4 n_arms, 3) points in metres — shoulder, elbow, wrist,
+    finger of the right arm, then of the left for a two-arm trial — in body axes (+x
+    forward, +y left, +z up), each arm with its own shoulder at the origin."""
+    from visprim.ik import implied_joint_centres
+
+    n_arms = trial.markers.shape[1] // 4
+    out = []
+    for arm in range(n_arms):
+        markers = trial.markers[:, 4 * arm : 4 * arm + 4]
+        joints = trial.joints
+        if joints is not None and joints.shape[1] >= 3 * (arm + 1):
+            centres = joints[:, 3 * arm : 3 * arm + 3]
+        else:
+            centres = implied_joint_centres(markers)
+        points = np.concatenate([centres, markers[:, 3:4]], axis=1)
+        out.append(points - points[:, :1])
+    rel = np.concatenate(out, axis=1)
+    if trial.body_frame is not None:
+        rel = np.einsum("tji,tpj->tpi", trial.body_frame, rel)  # v_B = Fᵀ v
+    return rel
+
+
+def _uncovered(t0: float, t1: float, segments: NDArray[np.float64]) -> list[tuple[float, float]]:
+    out = []
+    edge = t0
+    for s, e in segments:
+        if s > edge + 1e-9:
+            out.append((edge, float(s)))
+        edge = max(edge, float(e))
+    if t1 > edge + 1e-9:
+        out.append((edge, t1))
+    return out
+
+
+# ---------------------------------------------------------------------------- imitate
+
+
+class Rebuild:
+    """The joined rebuild as arm angles.
+
+    ``channels`` is the :class:`JoinedTrajectory` of the segment curves in the model's
+    description (:mod:`visprim.features`: the Z-Y-Z angles themselves, or unit bone
+    directions, turned into angles by inverse kinematics). Calling it with times (s) gives
+    ``(angles (k, 4 n_arms) rad, velocities rad/s)``: for angles, the joined trajectory and
+    its analytic derivative; for directions, inverse kinematics of the joined directions and
+    the time derivative of the angles (finite differences over the given times). ``turns``
+    (4 n_arms,) rad is added to the angles (whole turns of γ and α, see :func:`imitate`).
+    """
+
+    def __init__(self, channels: JoinedTrajectory, features: str = "zyz") -> None:
+        self.channels = channels
+        self.features = features
+        self.turns: NDArray[np.float64] | None = None
+
+    @property
+    def start(self) -> float:
+        return self.channels.start
+
+    @property
+    def end(self) -> float:
+        return self.channels.end
+
+    def __call__(self, times: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        t = np.atleast_1d(np.asarray(times, dtype=np.float64))
+        values, rates = self.channels(t)
+        if self.features == "zyz":
+            angles, velocities = values, rates
+        else:
+            from visprim.features import to_angles
+
+            angles = to_angles(values, self.features, t)
+            velocities = np.gradient(angles, t, axis=0) if t.size > 1 else np.zeros_like(angles)
+        if self.turns is not None:
+            angles = angles + self.turns
+        return angles, velocities
+
+
+def _turns(angles: NDArray[np.float64], reference: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Whole turns (per column, rad) that bring γ and α of ``angles`` closest to
+    ``reference`` on average (zero for β and the elbow)."""
+    out = np.zeros(angles.shape[1])
+    for c in range(0, angles.shape[1], 4):
+        for k in (c, c + 2):
+            out[k] = 2 * np.pi * np.round(np.mean(reference[:, k] - angles[:, k]) / (2 * np.pi))
+    return out
+
+
+def _read(recording: Trial | str | Path, arms: tuple[str, ...]) -> Trial:
+    if isinstance(recording, Trial):
+        return recording
+    from visprim.io import read
+
+    return read(str(recording), arm="both" if len(arms) == 2 else "right")
+
+
+def imitate(
+    model: Any,
+    recording: Trial | str | Path,
+    *,
+    source: Source = "primitives",
+    servo: Servo = "stable",
+    period: float | None | Literal["model"] = "model",
+    dt: float = 0.001,
+    render_fps: float = 25.0,
+    play: bool = True,
+) -> Imitation:
+    """Imitate one recording with a fitted model (see the module docstring).
+
+    Parameters
+    ----------
+    model : PrimitiveModel — fitted (or loaded).
+    recording : Trial or path — any file :func:`visprim.io.read` reads.
+    source : "primitives" (default) or "projection" (near-copy, labelled as such).
+    servo : "stable" (stable PD, default) or "paper" (eq. (1) with via-point switching).
+    period : seconds, None or "model" — resample to this frame period (None: keep the file's
+        rate; "model": :func:`model_frame_period`).
+    dt : simulation step, s. render_fps : rate of the stored frames, Hz.
+    play : run the simulation (False: rebuild and its errors only).
+
+    Raises
+    ------
+    ValueError
+        Unreadable recording, no segment found, bad options (one line naming the problem).
+    """
+    if source not in SOURCE_LABELS:
+        raise ValueError(f"source must be 'primitives' or 'projection', got {source!r}")
+    if servo not in ("stable", "paper"):
+        raise ValueError(f"servo must be 'stable' or 'paper', got {servo!r}")
+    arms = tuple(getattr(model, "arms_", ("right",)))
+    trial = _read(recording, arms)
+    target = model_frame_period(model) if period == "model" else period
+    if target is not None and abs(trial.frame_period - float(target)) > 1e-9 * float(target):
+        from visprim.io import resample_trial
+
+        trial = resample_trial(trial, float(target))
+    name = trial.name or Path(str(trial.source or "recording")).stem
+
+    corpus = model.prepare([trial])
+    seg = corpus.segmentation
+    if seg.n_segments == 0:
+        raise ValueError(
+            f"{trial.source or name}: no segment found (the arm never moves significantly for "
+            f"{seg.method.upper()}); nothing to imitate"
+        )
+    sv = model.vectorize(corpus)
+    projections = model.transform(sv.vectors)
+    labels, distances = model.assign(projections)
+    coords = model.cluster_centers_[labels] if source == "primitives" else projections
+    # Curves in the model's description (angles or bone directions), on the trial's turns.
+    curves = sv.to_trial_angles(coords @ model.components_.T + model.mean_)
+    bounds = np.stack([sv.starts, sv.ends], axis=1)
+    rebuild = Rebuild(
+        JoinedTrajectory(list(curves), bounds), str(getattr(model, "features", "zyz"))
+    )
+
+    times = corpus.times_all
+    human = corpus.angles_all
+    inside = (times >= rebuild.start - 1e-9) & (times <= rebuild.end + 1e-9)
+    # One evaluation on the frames and a fine grid together (inverse kinematics unwraps γ and
+    # α along it), put on the human's whole turns.
+    n_fine = max(2, int(np.ceil((rebuild.end - rebuild.start) / PLAY_SAMPLE_S)) + 1)
+    grid = np.union1d(times[inside], np.linspace(rebuild.start, rebuild.end, n_fine))
+    grid_a, grid_v = rebuild(grid)
+    rows = np.searchsorted(grid, times[inside])
+    rebuild.turns = _turns(grid_a[rows], human[inside])
+    grid_a = grid_a + rebuild.turns
+    rb_a = np.full_like(human, np.nan)
+    rb_v = np.full_like(human, np.nan)
+    rb_a[inside], rb_v[inside] = grid_a[rows], grid_v[rows]
+    seg_of = np.full(times.shape[0], -1, dtype=np.int64)
+    for j, (s, e) in enumerate(bounds):
+        last = j == bounds.shape[0] - 1
+        seg_of[(times >= s - 1e-9) & ((times <= e + 1e-9) if last else (times < e - 1e-9))] = j
+    cov = seg_of >= 0
+
+    t0, t1 = float(times[0]), float(times[-1])
+    gaps = _uncovered(t0, t1, bounds)
+    uncovered_s = float(sum(e - s for s, e in gaps))
+    duration = t1 - t0
+    metrics: dict[str, Any] = {
+        "recording": str(trial.source or name),
+        "name": name,
+        "source": source,
+        "source_label": SOURCE_LABELS[source],
+        "frame_period_s": float(trial.frame_period),
+        "segmentation": str(seg.method),
+        "n_segments": int(bounds.shape[0]),
+        "primitive_sequence": [int(k) for k in labels],
+        "segments": [
+            {"start_s": float(s), "end_s": float(e), "primitive": int(k), "distance_rad": float(d)}
+            for (s, e), k, d in zip(bounds, labels, distances, strict=True)
+        ],
+        "human_duration_s": duration,
+        "covered_span_s": rebuild.end - rebuild.start,
+        "coverage": {
+            "covered_s": duration - uncovered_s,
+            "uncovered_s": uncovered_s,
+            "uncovered_percent": 100.0 * uncovered_s / duration if duration > 0 else 0.0,
+            "uncovered": [{"start_s": s, "end_s": e, "duration_s": e - s} for s, e in gaps],
+        },
+        "rebuild_vs_human_rms_deg": _angle_rms(rb_a[cov] - human[cov]),
+        "rebuild_vs_human_joint_rms_deg": _joint_rms(*joint_space_errors(rb_a[cov], human[cov])),
+    }
+
+    playback = None
+    adonis = None
+    if play:
+        playback, adonis = _play(rebuild.start, grid, grid_a, times, human, servo, dt, render_fps)
+        metrics["adonis"] = _adonis_metrics(playback, adonis, rb_a, human, cov, servo, dt)
+        metrics["adonis"]["time_ratio_full"] = playback.completion_time / duration
+    return Imitation(
+        name=name,
+        source=source,
+        trial=trial,
+        times=times,
+        human=human,
+        segments=bounds,
+        primitives=labels,
+        distances=distances,
+        segment_of_frame=seg_of,
+        rebuild=rebuild,
+        rebuild_angles=rb_a,
+        rebuild_velocities=rb_v,
+        adonis_angles=adonis,
+        playback=playback,
+        metrics=metrics,
+    )
+
+
+def _play(
+    start: float,
+    grid: NDArray[np.float64],
+    angles: NDArray[np.float64],
+    times: NDArray[np.float64],
+    human: NDArray[np.float64],
+    servo: Servo,
+    dt: float,
+    render_fps: float,
+) -> tuple[Any, NDArray[np.float64]]:
+    from visprim.sim.model import build_adonis
+    from visprim.sim.playback import play
+    from visprim.sim.sequencer import positions_to_angles
+
+    adonis_model = build_adonis(dt)
+    playback = play(grid, angles, dt=dt, render_fps=render_fps, servo=servo, model=adonis_model)
+    # Adonis at the recording's frames, same clock (simulation time 0 = start).
+    out = np.full_like(human, np.nan)
+    played = (times >= start - 1e-9) & (times <= start + playback.times[-1] + 1e-9)
+    steps = np.clip(
+        np.rint((times[played] - start) / dt).astype(np.int64),
+        0,
+        playback.q_actual.shape[0] - 1,
+    )
+    q = playback.q_actual[steps]
+    n_arms = human.shape[1] // 4
+    out[played] = _same_branch(positions_to_angles(adonis_model[1], q, n_arms), human[played])
+    return playback, out
+
+
+def _adonis_metrics(
+    playback: Any,
+    adonis: NDArray[np.float64],
+    rebuild: NDArray[np.float64],
+    human: NDArray[np.float64],
+    covered: NDArray[np.bool_],
+    servo: str,
+    dt: float,
+) -> dict[str, Any]:
+    sel = covered & np.isfinite(adonis[:, 0])
+    missing = int(covered.sum() - sel.sum())
+    return {
+        "servo": servo,
+        "dt_s": dt,
+        "vs_human_joint_rms_deg": _joint_rms(*joint_space_errors(adonis[sel], human[sel])),
+        "vs_rebuild_joint_rms_deg": _joint_rms(*joint_space_errors(adonis[sel], rebuild[sel])),
+        "vs_human_rms_deg": _angle_rms(adonis[sel] - human[sel]),
+        "vs_setpoint_rms_deg": float(playback.rms_error_deg),
+        "completion_time_s": float(playback.completion_time),
+        "time_ratio": float(playback.completion_time / playback.movement_duration),
+        "via_reached": int(playback.n_reached),
+        "via_points": int(playback.n_via),
+        "frames_compared": int(sel.sum()),
+        "frames_not_played": missing,
+        "wall_time_s": float(playback.wall_time),
+    }
+
+
+# ---------------------------------------------------------------------------- output
+
+
+def trajectory_of(imitation: Imitation) -> Any:
+    """The rebuild (what Adonis was asked to perform) as a URDF joint trajectory at the
+    recording's frames inside the rebuilt span (:mod:`visprim.sim.export`)."""
+    from visprim.sim.export import arm_trajectory
+
+    inside = np.isfinite(imitation.rebuild_angles[:, 0])
+    return arm_trajectory(
+        imitation.times[inside],
+        imitation.rebuild_angles[inside],
+        imitation.rebuild_velocities[inside],
+        f"{imitation.name}: {SOURCE_LABELS[imitation.source]}; time 0 = "
+        f"{imitation.rebuild.start:.3f} s on the recording's clock (start of the first segment)",
+    )
+
+
+def imitation_csv(imitation: Imitation) -> str:
+    """One row per frame of the recording: time (s), segment and primitive (-1 where no
+    segment covers it), the human's, the rebuild's and Adonis's angles (rad) and the
+    rebuild's angular velocities (rad/s); empty where a value does not exist."""
+    import csv
+    import io
+
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    cols = ["time_s", "segment", "primitive"]
+    for who in ("human", "rebuild", "adonis"):
+        cols += [f"{who}_{a}_rad" for a in channel_names(imitation.human.shape[1])]
+    cols += [f"rebuild_{a}_rad_s" for a in channel_names(imitation.human.shape[1])]
+    w.writerow(cols)
+    adonis = (
+        imitation.adonis_angles
+        if imitation.adonis_angles is not None
+        else np.full_like(imitation.human, np.nan)
+    )
+
+    def fmt(row: NDArray[np.float64]) -> list[str]:
+        return ["" if not np.isfinite(x) else f"{x:.7g}" for x in row]
+
+    for i, t in enumerate(imitation.times):
+        j = int(imitation.segment_of_frame[i])
+        w.writerow(
+            [f"{t:.6f}", j, int(imitation.primitives[j]) if j >= 0 else -1]
+            + fmt(imitation.human[i])
+            + fmt(imitation.rebuild_angles[i])
+            + fmt(adonis[i])
+            + fmt(imitation.rebuild_velocities[i])
+        )
+    return buf.getvalue()
+
+
+def write_imitation(
+    imitation: Imitation,
+    out_dir: str | Path,
+    *,
+    video: str | None = "imitation.gif",
+    size: tuple[int, int] = (480, 480),
+    extra: dict[str, Any] | None = None,
+) -> dict[str, Path]:
+    """Write the results of :func:`imitate` into ``out_dir`` (created):
+
+    * ``imitation.json`` — :attr:`Imitation.metrics` (+ ``extra``) and the file list;
+    * ``imitation.csv`` — the trajectories (:func:`imitation_csv`);
+    * ``trajectory.json`` / ``trajectory.csv`` — the rebuild as URDF joint trajectory
+      (:mod:`visprim.sim.export`);
+    * the video ``video`` (.gif or .mp4; None for none): human beside Adonis.
+
+    Nothing is written half-way: the video's format is checked first, every file is written
+    into a hidden staging folder inside ``out_dir`` and moved into place (:func:`os.replace`)
+    only once all of them exist; on failure the staging folder is removed. Returns the paths
+    by kind.
+    """
+    import json
+    import os
+    import shutil
+    import tempfile
+
+    out = Path(out_dir)
+    if video is not None:
+        from visprim.sim.video import check_video_path
+
+        check_video_path(out / video)
+    out.mkdir(parents=True, exist_ok=True)
+    stage = Path(tempfile.mkdtemp(prefix=".imitation-", dir=out))
+    try:
+        names: dict[str, str] = {"csv": "imitation.csv"}
+        (stage / names["csv"]).write_text(imitation_csv(imitation), encoding="utf-8")
+        js, cs = trajectory_of(imitation).write(stage / "trajectory")
+        names["trajectory_json"], names["trajectory_csv"] = js.name, cs.name
+        if video is not None and imitation.playback is not None:
+            from visprim.sim.sidebyside import render_imitation
+
+            names["video"] = render_imitation(imitation, stage / video, size=size).name
+        doc = dict(imitation.metrics)
+        doc.update(extra or {})
+        doc["files"] = dict(names)
+        names["json"] = "imitation.json"
+        (stage / names["json"]).write_text(json.dumps(doc, indent=1) + "\n", encoding="utf-8")
+        for name in names.values():
+            os.replace(stage / name, out / name)
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+    return {kind: out / name for kind, name in names.items()}

@@ -1,0 +1,177 @@
+"""The imitation video: the human's recorded arm beside Adonis, on the same clock.
+
+Left panel: the recorded right arm (shoulder, elbow, wrist, finger; body axes, shoulder at
+the origin) as a stick figure attached at Adonis's right shoulder, over a faint picture of
+Adonis's body at rest (drawn once and reused), with the path of the finger. Right panel:
+Adonis's playback (:class:`visprim.sim.render.PlaybackDrawer`). Both panels use the same
+camera. Video time ``τ`` runs on the recording's clock from its first frame: the human at
+``τ``, Adonis ``τ − start`` seconds into its playback (``start`` = where the first segment
+begins), holding its first pose before and its last after.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from PIL import Image, ImageDraw
+
+from visprim.sim.model import LINKS, SHOULDER_OFFSET, WAIST_HEIGHT
+from visprim.sim.render import SUPERSAMPLE, Camera, Painter, PlaybackDrawer, _Label
+from visprim.sim.video import write_video
+
+#: Where the human's shoulders are drawn: Adonis's right (then left) shoulder at rest
+#: (world, metres).
+SHOULDER_WORLD = np.array(
+    [
+        [SHOULDER_OFFSET[0], -SHOULDER_OFFSET[1], WAIST_HEIGHT + SHOULDER_OFFSET[2]],
+        [SHOULDER_OFFSET[0], SHOULDER_OFFSET[1], WAIST_HEIGHT + SHOULDER_OFFSET[2]],
+    ]
+)
+_ARM_BODIES = ("r_upper_arm", "r_forearm", "r_hand", "l_upper_arm", "l_forearm", "l_hand")
+_HUMAN_COLORS = ((200, 60, 30), (220, 110, 30), (235, 160, 40))
+
+
+def _rest_transforms(n_arms: int) -> tuple[NDArray[np.float64], list[Any]]:
+    """World transforms (n, 4, 4) and shapes of Adonis's bodies at rest, without the arms
+    drawn from the recording (the right one, or both)."""
+    tfs, shapes = [], []
+    offsets: dict[str, NDArray[np.float64]] = {}
+    for link in LINKS:
+        base = offsets.get(link.parent, np.zeros(3)) if link.parent else np.zeros(3)
+        origin = base + np.asarray(link.joint_offset)
+        offsets[link.name] = origin
+        if link.name in _ARM_BODIES[: 3 * n_arms]:
+            continue
+        tf = np.eye(4)
+        tf[:3, 3] = origin
+        tfs.append(tf)
+        shapes.append(link.shapes)
+    return np.stack(tfs), shapes
+
+
+class SideBySide:
+    """Draws the frames of an :class:`visprim.imitate.Imitation` (see the module docstring)."""
+
+    def __init__(
+        self,
+        imitation: Any,
+        size: tuple[int, int] = (480, 480),
+        camera: Camera | None = None,
+    ) -> None:
+        from visprim.imitate import human_arm_points
+
+        if imitation.playback is None:
+            raise ValueError("the imitation was not played on Adonis (play=False): no video")
+        cam = camera or Camera()
+        self.size = size
+        self.fps = float(imitation.playback.render_fps)
+        pb = imitation.playback
+        m = imitation.metrics
+        adonis = m["adonis"]
+        seq = " ".join(str(int(k)) for k in imitation.primitives)
+        if len(seq) > 40:
+            seq = seq[:37] + "..."
+        what = "primitives" if imitation.source == "primitives" else "NEAR-COPY (projection)"
+        self.adonis = PlaybackDrawer(
+            pb,
+            cam,
+            size,
+            title=f"Adonis: {what} {seq if imitation.source == 'primitives' else ''}".strip(),
+            footer=(
+                f"vs human {adonis['vs_human_joint_rms_deg']['overall']:.1f}°  "
+                f"vs rebuild {adonis['vs_rebuild_joint_rms_deg']['overall']:.1f}°  "
+                f"time {adonis['time_ratio']:.2f}x  via {pb.n_reached}/{pb.n_via}"
+            ),
+        )
+        self.painter = Painter(cam, size)
+        p = self.painter
+        # Background of the human panel: Adonis at rest without the recorded arm(s), faint.
+        n_arms = imitation.human.shape[1] // 4
+        tfs, shapes = _rest_transforms(n_arms)
+        self.background, draw = p.canvas()
+        p.draw_items(draw, p.body_items(tfs, shapes, tint=(0.75, 0.93)))
+        trial = imitation.trial
+        self.human_times = trial.times - trial.times[0]
+        points = human_arm_points(trial) + np.repeat(SHOULDER_WORLD[:n_arms], 4, axis=0)
+        self.human_2d = p.project(points)  # (T, 4 n_arms, 2)
+        self.n_arms = n_arms
+        self.finger_runs = [
+            run
+            for a in range(n_arms)
+            for run in p.dash_runs(self.human_2d[:, 4 * a + 3], 6.0 * SUPERSAMPLE)
+        ]
+        w, h = size
+        rb = m["rebuild_vs_human_rms_deg"]["overall"]
+        cov = m["coverage"]
+        self.labels = [
+            _Label(f"human: {imitation.name}", 11, "la", (4, 4), False),
+            _Label(
+                f"rebuild vs human {rb:.1f}° RMS  uncovered {cov['uncovered_s']:.2f} s "
+                f"({cov['uncovered_percent']:.0f}%)",
+                9.5,
+                "md",
+                (w / 2, h - 3),
+                True,
+            ),
+        ]
+        self.start = float(imitation.rebuild.start - trial.times[0])
+        end = max(self.human_times[-1], self.start + float(pb.frame_times[-1]))
+        self.n_frames = int(np.floor(end * self.fps + 1e-9)) + 1
+
+    def human_frame(self, tau: float) -> Image.Image:
+        """The human panel at video time ``tau`` seconds."""
+        p = self.painter
+        image = self.background.copy()
+        draw = ImageDraw.Draw(image)
+        i = int(np.clip(np.searchsorted(self.human_times, tau, side="right") - 1, 0, None))
+        for run in self.finger_runs:
+            draw.line(run, fill=(150, 150, 210), width=SUPERSAMPLE)
+        s = SUPERSAMPLE
+        r = 4.5 * s
+        for a in range(self.n_arms):
+            p.polyline(draw, self.human_2d[: i + 1, 4 * a + 3], (230, 102, 13), 1.6 * s)
+            pts = self.human_2d[i, 4 * a : 4 * a + 4]
+            for u, v, col in zip(pts[:-1], pts[1:], _HUMAN_COLORS, strict=True):
+                draw.line((*u, *v), fill=col, width=int(7 * s))
+            for x, y in pts:
+                draw.ellipse((x - r, y - r, x + r, y + r), fill=(60, 60, 60))
+        out = p.finish(image)
+        for label in self.labels:
+            label.paste(out)
+        p.text(out, (self.size[0] - 4, 4), f"t = {tau:.2f} s", 11, "ra")
+        return out
+
+    def frame(self, index: int) -> Image.Image:
+        """Video frame ``index`` (both panels side by side)."""
+        tau = index / self.fps
+        k = int(
+            np.clip(
+                round((tau - self.start) * self.fps), 0, self.adonis.playback.frames.shape[0] - 1
+            )
+        )
+        w, h = self.size
+        out = Image.new("RGB", (2 * w, h), (255, 255, 255))
+        out.paste(self.human_frame(tau), (0, 0))
+        out.paste(self.adonis.draw(k, clock=tau), (w, 0))
+        return out
+
+    def frames(self) -> Iterator[Image.Image]:
+        for i in range(self.n_frames):
+            yield self.frame(i)
+
+
+def render_imitation(
+    imitation: Any,
+    path: str | Path,
+    *,
+    size: tuple[int, int] = (480, 480),
+    camera: Camera | None = None,
+) -> Path:
+    """Write the side-by-side video of an imitation (.gif or .mp4, from the extension),
+    atomically, at the playback's frame rate. Returns the path."""
+    view = SideBySide(imitation, size, camera)
+    return write_video(path, view.frames(), view.fps)

@@ -1,0 +1,80 @@
+"""``visprim imitate`` and ``visprim export-robot`` from the command line."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from visprim import PrimitiveModel
+from visprim.cli.main import main
+from visprim.datasets import imitation_experiment
+from visprim.markers_csv import write_marker_csv
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("imitate_cli")
+    trials = imitation_experiment(2, 4, seed=4)
+    model = PrimitiveModel(n_clusters=5, n_init=2).fit(trials[:-1])
+    model_path = tmp / "model.npz"
+    model.save(model_path)
+    rec = write_marker_csv(tmp / "take.csv", trials[-1])
+    return model_path, rec, model.n_primitives
+
+
+def test_imitate_writes_metrics_trajectories_and_video(files, tmp_path, capsys) -> None:
+    model, rec, _ = files
+    out = tmp_path / "out"
+    assert main(["imitate", str(model), str(rec), "--out", str(out), "--size", "96"]) == 0
+    printed = capsys.readouterr().out
+    assert "primitives" in printed and "uncovered" in printed and "Adonis vs human" in printed
+    names = {p.name for p in out.iterdir()}
+    assert {"imitation.json", "imitation.csv", "trajectory.json", "trajectory.csv"} <= names
+    assert "imitation.gif" in names
+    doc = json.loads((out / "imitation.json").read_text())
+    assert doc["adonis"]["servo"] == "stable" and doc["model"].endswith("model.npz")
+    assert not [n for n in names if n.startswith(".") and "tmp" in n]  # no temporary files
+
+
+def test_imitate_projection_is_labelled(files, tmp_path, capsys) -> None:
+    model, rec, _ = files
+    out = tmp_path / "near"
+    argv = ["imitate", str(model), str(rec), "--out", str(out), "--no-video"]
+    assert main([*argv, "--source", "projection"]) == 0
+    assert "NEAR-COPY" in capsys.readouterr().out
+    assert json.loads((out / "imitation.json").read_text())["source"] == "projection"
+
+
+def test_imitate_refuses_bad_input_in_one_line(files, tmp_path, capsys) -> None:
+    model, rec, _ = files
+    out = tmp_path / "x"
+    assert main(["imitate", str(model), str(rec), "--out", str(out), "--video", "a.avi"]) == 2
+    err = capsys.readouterr().err
+    assert "unsupported video format" in err and err.count("\n") == 1
+    assert not out.exists()
+    assert main(["imitate", str(model), str(tmp_path / "none.bvh"), "--out", str(out)]) == 2
+    assert "not found" in capsys.readouterr().err
+    bad = tmp_path / "bad.bvh"
+    bad.write_text("HIERARCHY\nnonsense\n")
+    assert main(["imitate", str(model), str(bad), "--out", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("visprim imitate: error:") and "bad.bvh" in err
+    assert err.count("\n") == 1
+    assert not out.exists()
+
+
+def test_export_robot_writes_urdf_and_primitive_trajectories(files, tmp_path, capsys) -> None:
+    model, _, k = files
+    urdf = tmp_path / "adonis.urdf"
+    traj = tmp_path / "traj"
+    argv = ["export-robot", "--out", str(urdf), "--model", str(model), "--trajectories", str(traj)]
+    assert main(argv) == 0
+    assert urdf.read_text().startswith('<?xml version="1.0"?>')
+    assert len(list(traj.glob("primitive_*.json"))) == len(list(traj.glob("primitive_*.csv"))) == k
+    doc = json.loads((traj / "primitive_00.json").read_text())
+    assert len(doc["joint_names"]) == 20 and doc["points"][0]["time_from_start"]["sec"] == 0
+    assert main(["export-robot", "--out", str(tmp_path / "a.xml")]) == 2
+    assert ".urdf" in capsys.readouterr().err
+    assert main(argv) == 2  # outputs exist
+    assert "--force" in capsys.readouterr().err
+    assert main([*argv, "--force"]) == 0
