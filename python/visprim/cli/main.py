@@ -13,7 +13,15 @@ import sys
 from collections.abc import Sequence
 
 #: Command modules of :mod:`visprim.cli`, in help order.
-COMMANDS: tuple[str, ...] = ("demo", "generate", "learn", "report", "classify", "simulate")
+COMMANDS: tuple[str, ...] = (
+    "demo",
+    "generate",
+    "learn",
+    "report",
+    "classify",
+    "evaluate",
+    "simulate",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
