@@ -22,10 +22,9 @@ Whole movements
 * :class:`PrimitiveHistogramClassifier`: a classifier of the trials' primitive histograms
   (nearest centroid or logistic regression).
 
-A movement may involve several arms: a :class:`~visprim.trial.Trial` whose ``markers`` hold
-4 markers per arm (``(T, 4 a, 3)``, e.g. the right arm then the left arm mirrored to
-right-arm convention), or a tuple of one-arm trials of the same recording
-(:func:`split_arms`). :func:`leave_one_group_out` cross-validates any of these classifiers.
+A movement is a :class:`~visprim.trial.Trial` of one arm or of both
+(``visprim.io.read(path, arm="both")``); all movements given to one classifier have the
+same arms. :func:`leave_one_group_out` cross-validates any of these classifiers.
 """
 
 from __future__ import annotations
@@ -43,14 +42,11 @@ from sklearn.metrics import adjusted_rand_score
 from sklearn.neighbors import NearestCentroid
 
 from visprim import kernels
-from visprim.arm import ArmLengths, forward_kinematics
+from visprim.features import from_angles, periodic_channels
 from visprim.ik import implied_joint_centres
 from visprim.model import PrimitiveModel
 from visprim.trial import Trial
-from visprim.vectors import vectors_from_frames
-
-#: A movement: one trial (4 markers per arm) or a tuple of one-arm trials of one recording.
-Movement = Trial | tuple[Trial, ...]
+from visprim.vectors import to_curves, vectors_from_frames
 
 
 @dataclass(frozen=True)
@@ -411,77 +407,41 @@ def bandai_wave_vs_raise(trials: Sequence[Trial]) -> tuple[list[Trial], list[str
     return keep, labels, styles
 
 
-# ------------------------------------------------------------------ movements and their arms
+# ------------------------------------------------------------------ whole movements
 
 
-def split_arms(movement: Movement) -> tuple[Trial, ...]:
-    """The one-arm trials of a movement.
-
-    A :class:`~visprim.trial.Trial` with ``4 a`` markers (and ``3 a`` joints, if any) gives
-    ``a`` trials of 4 markers, in marker order (the right arm first for ``arm="both"``
-    recordings); a tuple of trials is returned as it is (each must hold one arm and all the
-    same number of frames).
-    """
-    if isinstance(movement, Trial):
-        n_markers = movement.markers.shape[1]
-        if n_markers == 4:
-            return (movement,)
-        if n_markers % 4:
-            raise ValueError(f"trial {movement.name!r}: {n_markers} markers are not 4 per arm")
-        out = []
-        for a in range(n_markers // 4):
-            joints = None if movement.joints is None else movement.joints[:, 3 * a : 3 * a + 3]
-            out.append(
-                Trial(
-                    times=movement.times,
-                    markers=movement.markers[:, 4 * a : 4 * a + 4],
-                    joints=joints,
-                    body_frame=movement.body_frame,
-                    name=movement.name,
-                    subject=movement.subject,
-                    stimulus=movement.stimulus,
-                    repetitions=movement.repetitions,
-                    source=movement.source,
-                    meta=movement.meta,
-                )
-            )
-        return tuple(out)
-    arms = tuple(movement)
-    if not arms or not all(isinstance(t, Trial) for t in arms):
-        raise TypeError("a movement is a visprim.Trial or a non-empty tuple of Trial (one per arm)")
-    if len({t.n_frames for t in arms}) != 1:
-        raise ValueError(
-            f"the arms of movement {arms[0].name!r} have different numbers of frames "
-            f"({', '.join(str(t.n_frames) for t in arms)})"
-        )
-    return arms
-
-
-def _arms_of(movements: Sequence[Movement], what: str) -> list[tuple[Trial, ...]]:
-    if isinstance(movements, (Trial, tuple)):
-        movements = [movements]  # type: ignore[list-item]
-    out = [split_arms(m) for m in movements]
-    if not out:
+def _trials_of(movements: Sequence[Trial] | Trial, what: str) -> list[Trial]:
+    trials = [movements] if isinstance(movements, Trial) else list(movements)
+    if not trials:
         raise ValueError(f"{what}: no movements given")
-    counts = {len(a) for a in out}
-    if len(counts) != 1:
-        raise ValueError(f"{what}: movements have different numbers of arms ({sorted(counts)})")
-    return out
+    for i, t in enumerate(trials):
+        if not isinstance(t, Trial):
+            raise TypeError(f"{what}: item {i} is a {type(t).__name__}, expected visprim.Trial")
+    arms = {t.arms for t in trials}
+    if len(arms) != 1:
+        raise ValueError(
+            f"{what}: movements have different arms ({sorted(list(a) for a in arms)}); read "
+            "them all with the same arm= option"
+        )
+    return trials
 
 
 def arm_directions(trial: Trial) -> NDArray[np.float64]:
     """Unit upper-arm (shoulder → elbow) and forearm (elbow → wrist) directions per frame,
-    in the torso's axes (``body_frame``; the recording axes without one): (T, 6), one block
-    of 6 per arm for multi-arm trials. Uses the recording's joint centres when it has them,
-    else the centres the markers imply (:func:`visprim.ik.implied_joint_centres`)."""
+    in the torso's axes (``body_frame``; the recording axes without one): (T, 6 n_arms),
+    arm by arm. Uses the recording's joint centres when it has them, else the centres the
+    markers imply (:func:`visprim.ik.implied_joint_centres`)."""
     blocks = []
-    for arm in split_arms(trial):
-        c = arm.joints if arm.joints is not None else implied_joint_centres(arm.markers)
+    for a in range(trial.n_arms):
+        if trial.joints is not None:
+            c = trial.joints[:, 3 * a : 3 * a + 3]
+        else:
+            c = implied_joint_centres(trial.markers[:, 4 * a : 4 * a + 4])
         upper = c[:, 1] - c[:, 0]
         fore = c[:, 2] - c[:, 1]
-        if arm.body_frame is not None:
-            upper = np.einsum("tji,tj->ti", arm.body_frame, upper)
-            fore = np.einsum("tji,tj->ti", arm.body_frame, fore)
+        if trial.body_frame is not None:
+            upper = np.einsum("tji,tj->ti", trial.body_frame, upper)
+            fore = np.einsum("tji,tj->ti", trial.body_frame, fore)
         for v in (upper, fore):
             norm = np.linalg.norm(v, axis=1, keepdims=True)
             blocks.append(v / np.where(norm > 0, norm, 1.0))
@@ -515,7 +475,7 @@ class _NearestSequences(ClassifierMixin, BaseEstimator):  # type: ignore[misc]
     band: float | None
     n_neighbors: int
 
-    def _features(self, arms: list[tuple[Trial, ...]]) -> list[NDArray[np.float64]]:
+    def _features(self, trials: list[Trial]) -> Any:
         raise NotImplementedError
 
     def _check_common(self) -> None:
@@ -524,39 +484,47 @@ class _NearestSequences(ClassifierMixin, BaseEstimator):  # type: ignore[misc]
         if not isinstance(self.n_neighbors, (int, np.integer)) or self.n_neighbors < 1:
             raise ValueError(f"n_neighbors must be an integer >= 1, got {self.n_neighbors!r}")
 
-    def _fit_features(self, arms: list[tuple[Trial, ...]]) -> None:
+    def _fit_features(self, trials: list[Trial]) -> None:
         """Learn whatever the features need (nothing for fixed features)."""
 
-    def fit(self, movements: Sequence[Movement], y: Sequence[Any]) -> _NearestSequences:
-        """Keep the training movements' features and labels ``y``."""
+    def _fit_common(self, movements: Sequence[Trial], y: Sequence[Any]) -> list[Trial]:
         self._check_common()
-        arms = _arms_of(movements, "fit")
+        trials = _trials_of(movements, "fit")
         labels = np.asarray(list(y))
-        if len(arms) != labels.shape[0]:
-            raise ValueError(f"fit: {len(arms)} movements but {labels.shape[0]} labels")
+        if len(trials) != labels.shape[0]:
+            raise ValueError(f"fit: {len(trials)} movements but {labels.shape[0]} labels")
         if np.unique(labels).size < 2:
             raise ValueError("fit: the training movements need at least two different labels")
-        self.n_arms_ = len(arms[0])
-        self._fit_features(arms)
-        self.train_features_ = self._features(arms)
+        self.arms_ = trials[0].arms
         self.train_labels_ = labels
         self.classes_ = np.unique(labels)
+        return trials
+
+    def fit(self, movements: Sequence[Trial], y: Sequence[Any]) -> _NearestSequences:
+        """Keep the training movements' features and labels ``y``."""
+        trials = self._fit_common(movements, y)
+        self._fit_features(trials)
+        self.train_features_ = self._features(trials)
         return self
 
     def _check_fitted(self) -> None:
         if not hasattr(self, "train_features_"):
             raise NotFittedError(f"{type(self).__name__} is not fitted; call fit first")
 
-    def distances(self, movements: Sequence[Movement]) -> NDArray[np.float64]:
-        """(n_movements, n_training) DTW costs to the training movements."""
+    def _query(self, movements: Sequence[Trial]) -> list[Trial]:
         self._check_fitted()
-        arms = _arms_of(movements, "predict")
-        if len(arms[0]) != self.n_arms_:
+        trials = _trials_of(movements, "predict")
+        if trials[0].arms != self.arms_:
             raise ValueError(
-                f"predict: movements have {len(arms[0])} arm(s), the classifier was fitted on "
-                f"{self.n_arms_}"
+                f"predict: movements have arms {list(trials[0].arms)}, the classifier was "
+                f"fitted on {list(self.arms_)}"
             )
-        return dtw_matrix(self._features(arms), self.train_features_, band=self.band)
+        return trials
+
+    def distances(self, movements: Sequence[Trial]) -> NDArray[np.float64]:
+        """(n_movements, n_training) DTW costs to the training movements."""
+        trials = self._query(movements)
+        return dtw_matrix(self._features(trials), self.train_features_, band=self.band)
 
     def predict_proba_from_distances(self, d: NDArray[np.float64]) -> NDArray[np.float64]:
         """Class fractions among the ``n_neighbors`` nearest training movements, (n, classes)
@@ -571,18 +539,19 @@ class _NearestSequences(ClassifierMixin, BaseEstimator):  # type: ignore[misc]
 
     def predict_from_distances(self, d: NDArray[np.float64]) -> NDArray[Any]:
         """Labels given the costs ``d`` (n, n_training) to the training movements: the most
-        frequent among the ``n_neighbors`` nearest, ties to the nearest."""
-        proba = self.predict_proba_from_distances(d)
+        frequent among the ``n_neighbors`` nearest (the nearest for 1)."""
         if int(self.n_neighbors) == 1:
+            self._check_fitted()
             return np.asarray(self.train_labels_[np.argmin(d, axis=1)])
+        proba = self.predict_proba_from_distances(d)
         return np.asarray(self.classes_[np.argmax(proba, axis=1)])
 
-    def predict_proba(self, movements: Sequence[Movement]) -> NDArray[np.float64]:
+    def predict_proba(self, movements: Sequence[Trial]) -> NDArray[np.float64]:
         """Class fractions among the nearest training movements (see
         :meth:`predict_proba_from_distances`)."""
         return self.predict_proba_from_distances(self.distances(movements))
 
-    def predict(self, movements: Sequence[Movement]) -> NDArray[Any]:
+    def predict(self, movements: Sequence[Trial]) -> NDArray[Any]:
         """Label of each movement."""
         return self.predict_from_distances(self.distances(movements))
 
@@ -604,16 +573,17 @@ class DTWClassifier(_NearestSequences):
         self.band = band
         self.n_neighbors = n_neighbors
 
-    def _features(self, arms: list[tuple[Trial, ...]]) -> list[NDArray[np.float64]]:
-        return [np.hstack([arm_directions(a) for a in m]) for m in arms]
+    def _features(self, trials: list[Trial]) -> list[NDArray[np.float64]]:
+        return [arm_directions(t) for t in trials]
 
 
 def _windows(
     model: PrimitiveModel, trials: Sequence[Trial], window: float
 ) -> tuple[Any, Any, NDArray[np.float64]]:
     """The window of ``window`` seconds around every frame of every trial, as segment
-    vectors: ``(SegmentVectors, prepared corpus, position of each frame in its window in
-    [0, 1])``."""
+    vectors of the model's features: ``(SegmentVectors, prepared corpus, position of each
+    frame in its window in [0, 1])``. The window is centred on the frame, shifted to stay
+    inside the trial, and covers the whole trial when the trial is shorter."""
     if not window > 0:
         raise ValueError(f"window must be a positive number of seconds, got {window!r}")
     corpus = model.prepare(list(trials), tune_seg2=False)
@@ -628,13 +598,14 @@ def _windows(
     end = start + width
     base = corpus.offsets[trial]
     sv = vectors_from_frames(
-        corpus.angles_all,
+        corpus.values,
         base + start,
         base + end,
         trial=trial,
         starts=start,
         ends=end,
         n_samples=int(model.n_samples),
+        periodic_channels=periodic_channels(corpus.features, len(corpus.arms)),
     )
     position = np.divide(local - start, width, out=np.zeros_like(width), where=width > 0)
     return sv, corpus, np.clip(position, 0.0, 1.0)
@@ -643,12 +614,10 @@ def _windows(
 def primitive_coordinates(
     model: PrimitiveModel, trials: Sequence[Trial], window: float
 ) -> list[NDArray[np.float64]]:
-    """Each frame of each (one-arm) trial in the primitives' PCA space: the projection
+    """Each frame of each trial in the primitives' PCA space: the projection
     ``p = E_fᵀ (s − s̄)`` of the segment vector ``s`` of the ``window`` seconds around the
-    frame (low-passed IK angles resampled to ``n_samples`` per angle, like a training
-    segment). The window is centred on the frame, shifted to stay inside the trial, and
-    covers the whole trial when the trial is shorter. One (T_i, f) array per trial, radians.
-    """
+    frame (the model's per-frame features, low-passed, resampled to ``n_samples`` like a
+    training segment). One (T_i, f) array per trial."""
     sv, corpus, _ = _windows(model, trials, window)
     return np.split(model.transform(sv.vectors), corpus.offsets[1:])
 
@@ -656,29 +625,27 @@ def primitive_coordinates(
 def reconstructed_directions(
     model: PrimitiveModel, trials: Sequence[Trial], window: float
 ) -> list[NDArray[np.float64]]:
-    """Each frame of each (one-arm) trial as the primitives' basis rebuilds it: the window
-    around the frame (as in :func:`primitive_coordinates`) is projected onto the f
-    eigenvectors and reconstructed (``E_f p + s̄``), the reconstruction is read at the
-    frame's place in the window, and its four angles are turned into the unit upper-arm and
-    forearm directions (forward kinematics of :mod:`visprim.arm`, in body axes). One (T_i, 6)
-    array per trial. Comparing directions rather than angles avoids the Euler angles'
-    singularity with the arm hanging, where γ and α swing while the arm barely moves."""
+    """Each frame of each trial as the primitives' basis rebuilds it: the window around the
+    frame (as in :func:`primitive_coordinates`) projected onto the f eigenvectors and
+    rebuilt (``E_f p + s̄``), read at the frame's place in the window, as unit upper-arm and
+    forearm directions (the model's own channels for ``features="directions"``, forward
+    kinematics of the angles for ``"zyz"``). One (T_i, 6 n_arms) array per trial."""
     sv, corpus, position = _windows(model, trials, window)
     p = model.transform(sv.vectors)
-    curves = sv.to_trial_angles(p @ model.components_.T + model.mean_)  # (F, n, 4)
+    rec = p @ model.components_.T + model.mean_
+    curves = to_curves(rec, sv.n_channels) + sv.offsets[:, None, :]  # (F, n, C)
     n = curves.shape[1]
     x = position * (n - 1)
     i0 = np.clip(np.floor(x).astype(np.int64), 0, n - 2)
     w = (x - i0)[:, None]
     rows = np.arange(curves.shape[0])
-    angles = curves[rows, i0] * (1.0 - w) + curves[rows, i0 + 1] * w
-    return np.split(_directions_from_angles(angles), corpus.offsets[1:])
-
-
-def _directions_from_angles(angles: NDArray[np.float64]) -> NDArray[np.float64]:
-    """(T, 6) unit upper-arm and forearm directions in body axes from (T, 4) arm angles."""
-    points = forward_kinematics(angles, ArmLengths(1.0, 1.0, 0.0, 0.0))
-    return np.hstack([points[:, 1] - points[:, 0], points[:, 2] - points[:, 1]])
+    values = curves[rows, i0] * (1.0 - w) + curves[rows, i0 + 1] * w
+    if corpus.features != "directions":
+        values = from_angles(values, "directions")
+    v = values.reshape(values.shape[0], -1, 3)
+    norm = np.linalg.norm(v, axis=2, keepdims=True)
+    v = v / np.where(norm > 0, norm, 1.0)
+    return np.split(v.reshape(values.shape), corpus.offsets[1:])
 
 
 MOTION_METHODS: tuple[str, ...] = ("combined", "frames", "coordinates", "segments", "histogram")
@@ -689,34 +656,36 @@ SEGMENT_WEIGHTS: tuple[float, ...] = (0.0, 0.25, 0.5, 1.0)
 class MotionClassifier(_NearestSequences):
     """Classify whole movements by the primitives they are made of.
 
-    ``fit`` learns a :class:`~visprim.model.PrimitiveModel` (PCA basis and primitives of the
-    SEG-2 segments) from the training movements only — every arm's segments together, the
-    left arm mirrored to right-arm convention — and keeps the training movements expressed
-    through it; ``predict`` gives each movement the label of its nearest training
-    movement(s) under a dynamic time warping (DTW) cost:
+    ``fit`` learns a :class:`~visprim.model.PrimitiveModel` (segmentation, PCA basis and
+    primitives) from the training movements only, and keeps them expressed through it;
+    ``predict`` gives each movement the label of its nearest training movement(s) under a
+    dynamic time warping (DTW) cost of one of these descriptions:
 
     * ``"frames"``: every frame re-expressed through the primitives' PCA basis — the
       segment-length window around it (``window`` times the median training segment
-      duration) projected onto the f eigenvectors and rebuilt — read as the unit upper-arm
-      and forearm directions of the rebuilt angles (:func:`reconstructed_directions`), all
-      arms side by side. Directions, not angles, so that the Euler angles' singularity with
-      the arm hanging does not distort distances.
-    * ``"segments"``: the sequence of the segments' f-D projections (one point per SEG-2
-      segment, in time order; arms compared separately and summed): which strokes, in which
-      order.
-    * ``"combined"`` (default): ``D_frames / s_frames + w · D_segments / s_segments``, each
-      cost divided by its median over pairs of training movements, and the weight ``w``
-      chosen in ``fit`` from :data:`SEGMENT_WEIGHTS` by leave-one-group-out 1-NN accuracy on
-      the training movements (``groups`` given to ``fit``; else leave-one-out), the smallest
-      on ties. Nothing of a held-out group is used to choose it.
-    * ``"coordinates"``: the windows' f-D projections themselves (:func:`primitive_coordinates`).
-    * ``"histogram"``: :class:`PrimitiveHistogramClassifier` on the first arm.
+      duration) projected onto the f eigenvectors and rebuilt — read as unit upper-arm and
+      forearm directions (:func:`reconstructed_directions`).
+    * ``"coordinates"``: the windows' f-D projections themselves
+      (:func:`primitive_coordinates`): the movement as a path in the primitives' space.
+    * ``"segments"``: the sequence of the segments' f-D projections (one point per
+      segment, in time order): which strokes, in which order.
+    * ``"combined"`` (default): ``D_coordinates / s_c + w · D_segments / s_s``, each cost
+      divided by its median over pairs of training movements, and the weight ``w`` chosen
+      in ``fit`` from :data:`SEGMENT_WEIGHTS` by leave-one-group-out 1-NN accuracy on the
+      training movements (``groups`` given to ``fit``; else leave-one-out), the smallest on
+      ties. Nothing of a held-out group is used to choose it.
+    * ``"histogram"``: :class:`PrimitiveHistogramClassifier` (nearest centroid of the
+      primitive histograms).
 
-    How the default was chosen, on the shared recordings (leave one group out, both arms):
-    HDM05 (11 classes, leave one actor out): frames 0.869 (= the DTW baseline on the raw
-    directions), segments 0.634, coordinates 0.717, and the frames + segments sum above the
-    baseline. The sum adds what the segmentation and the primitive space see (the order and
-    shape of strokes) to the pose sequence; see the README for the figures.
+    The default was chosen by measurement on the shared recordings, leave one group out,
+    both arms, bone-direction features (accuracy; the DTW 1-NN baseline on raw directions
+    in brackets): HDM05, 11 classes, leave one actor out — coordinates 0.89, frames 0.87,
+    segments 0.79, combined 0.90 (0.87); Bandai dataset 2, 4 gestures, leave one style out —
+    coordinates and frames lose to the baseline on slow styles (elderly, feminine: 0.63–0.75),
+    segments hold there (0.94–1.0), and the combination is the best of both. The per-frame
+    path says *how* the arm moves, the segment sequence *which strokes in which order*;
+    ``w`` lets each corpus weigh them. The commands reproducing these figures are in the
+    README (``visprim evaluate``).
 
     Parameters
     ----------
@@ -724,8 +693,8 @@ class MotionClassifier(_NearestSequences):
         Keyword arguments of :class:`~visprim.model.PrimitiveModel`.
     method : {"combined", "frames", "coordinates", "segments", "histogram"}
     window : float
-        Window of the frame features as a multiple of the median training segment duration
-        (default 1.0: one typical stroke).
+        Window of the per-frame descriptions as a multiple of the median training segment
+        duration (default 1.0: one typical stroke).
     band : float or None
         Sakoe–Chiba band of the DTW as a fraction of the length (default None).
     n_neighbors : int
@@ -734,7 +703,7 @@ class MotionClassifier(_NearestSequences):
     Attributes (after ``fit``)
     --------------------------
     model_ : the fitted PrimitiveModel.
-    window_seconds_ : float — the window of the frame features, seconds.
+    window_seconds_ : float — the window of the per-frame descriptions, seconds.
     weights_ : dict — weight of each DTW cost in the sum (already divided by its scale).
     scales_ : dict — median training cost of each term.
     segment_weight_ : float — ``w`` of ``method="combined"``.
@@ -756,41 +725,28 @@ class MotionClassifier(_NearestSequences):
         self.n_neighbors = n_neighbors
 
     def _terms(self) -> tuple[str, ...]:
-        return ("frames", "segments") if self.method == "combined" else (self.method,)
+        return ("coordinates", "segments") if self.method == "combined" else (self.method,)
 
-    def _fit_features(self, arms: list[tuple[Trial, ...]]) -> None:
+    def _fit_features(self, trials: list[Trial]) -> None:
         if self.method not in MOTION_METHODS:
             raise ValueError(
                 f"method must be one of {', '.join(MOTION_METHODS)}, got {self.method!r}"
             )
         if not (isinstance(self.window, (int, float)) and self.window > 0):
             raise ValueError(f"window must be a positive multiple, got {self.window!r}")
-        pooled = [t for m in arms for t in m]
-        self.model_ = PrimitiveModel(**dict(self.model_params or {})).fit(pooled)
+        self.model_ = PrimitiveModel(**dict(self.model_params or {})).fit(trials)
         durations = self.model_.segment_ends_ - self.model_.segment_starts_
         self.window_seconds_ = float(self.window) * float(np.median(durations))
 
-    def _features(self, arms: list[tuple[Trial, ...]]) -> Any:
-        """Per term, per movement: a (T, D) sequence (frames, coordinates) or a tuple of
-        one sequence per arm (segments)."""
-        n_arms = len(arms[0])
-        out: dict[str, list[Any]] = {}
+    def _features(self, trials: list[Trial]) -> dict[str, list[NDArray[np.float64]]]:
+        out: dict[str, list[NDArray[np.float64]]] = {}
         for term in self._terms():
-            per_arm = []
-            for a in range(n_arms):
-                trials = [m[a] for m in arms]
-                if term == "frames":
-                    per_arm.append(
-                        reconstructed_directions(self.model_, trials, self.window_seconds_)
-                    )
-                elif term == "coordinates":
-                    per_arm.append(primitive_coordinates(self.model_, trials, self.window_seconds_))
-                else:
-                    per_arm.append(self._segment_projections(trials))
-            if term == "segments":
-                out[term] = [tuple(p[i] for p in per_arm) for i in range(len(arms))]
+            if term == "frames":
+                out[term] = reconstructed_directions(self.model_, trials, self.window_seconds_)
+            elif term == "coordinates":
+                out[term] = primitive_coordinates(self.model_, trials, self.window_seconds_)
             else:
-                out[term] = [np.hstack([p[i] for p in per_arm]) for i in range(len(arms))]
+                out[term] = self._segment_projections(trials)
         return out
 
     def _segment_projections(self, trials: list[Trial]) -> list[NDArray[np.float64]]:
@@ -804,22 +760,8 @@ class MotionClassifier(_NearestSequences):
                 out[int(i)] = p[sv.trial == i]
         return out
 
-    def _term_costs(self, term: str, queries: list[Any], refs: list[Any] | None) -> NDArray[Any]:
-        if term != "segments":
-            return dtw_matrix(queries, refs, band=self.band)
-        total = None
-        for a in range(len(queries[0])):
-            d = dtw_matrix(
-                [q[a] for q in queries],
-                None if refs is None else [r[a] for r in refs],
-                band=self.band,
-            )
-            total = d if total is None else total + d
-        assert total is not None
-        return total
-
     def fit(
-        self, movements: Sequence[Movement], y: Sequence[Any], groups: Sequence[Any] | None = None
+        self, movements: Sequence[Trial], y: Sequence[Any], groups: Sequence[Any] | None = None
     ) -> MotionClassifier:
         """Learn the primitives from ``movements`` and keep them with their labels ``y``.
 
@@ -828,64 +770,56 @@ class MotionClassifier(_NearestSequences):
         movements; without it, leave-one-out.
         """
         if self.method == "histogram":
-            self._check_common()
-            self.histogram_ = PrimitiveHistogramClassifier(self.model_params).fit(
-                [m[0] for m in _arms_of(movements, "fit")], y
-            )
+            trials = self._fit_common(movements, y)
+            self.histogram_ = PrimitiveHistogramClassifier(self.model_params).fit(trials, y)
             self.model_ = self.histogram_.model_
-            self.classes_ = self.histogram_.classes_
-            self.train_features_ = {}
+            self.train_features_: Any = {}
             return self
         super().fit(movements, y)
         terms = self._terms()
-        train = {t: self._term_costs(t, self.train_features_[t], None) for t in terms}
         n = self.train_labels_.shape[0]
+        self.scales_ = {t: 1.0 for t in terms}
+        self.weights_ = {terms[0]: 1.0}
+        if self.method != "combined":
+            return self
+        train = {t: dtw_matrix(self.train_features_[t], band=self.band) for t in terms}
         off = ~np.eye(n, dtype=bool)
-        self.scales_ = {}
         for t in terms:
-            m = float(np.median(train[t][off])) if n > 1 else 1.0
+            m = float(np.median(train[t][off]))
             self.scales_[t] = m if m > 0 else 1.0
-        if self.method == "combined":
-            g = np.arange(n) if groups is None else np.asarray(list(groups))
-            if g.shape[0] != n:
-                raise ValueError(f"fit: {n} movements but {g.shape[0]} groups")
-            f = train["frames"] / self.scales_["frames"]
-            s = train["segments"] / self.scales_["segments"]
-            scores = [_inner_accuracy(f + w * s, self.train_labels_, g) for w in SEGMENT_WEIGHTS]
-            self.segment_weight_ = float(SEGMENT_WEIGHTS[int(np.argmax(scores))])
-            self.inner_accuracy_ = dict(zip(SEGMENT_WEIGHTS, scores, strict=True))
-            self.weights_ = {
-                "frames": 1.0 / self.scales_["frames"],
-                "segments": self.segment_weight_ / self.scales_["segments"],
-            }
-        else:
-            self.weights_ = {terms[0]: 1.0}
+        g = np.arange(n) if groups is None else np.asarray(list(groups))
+        if g.shape[0] != n:
+            raise ValueError(f"fit: {n} movements but {g.shape[0]} groups")
+        a = train[terms[0]] / self.scales_[terms[0]]
+        b = train[terms[1]] / self.scales_[terms[1]]
+        scores = [_inner_accuracy(a + w * b, self.train_labels_, g) for w in SEGMENT_WEIGHTS]
+        self.segment_weight_ = float(SEGMENT_WEIGHTS[int(np.argmax(scores))])
+        self.inner_accuracy_ = dict(zip(SEGMENT_WEIGHTS, scores, strict=True))
+        self.weights_ = {
+            terms[0]: 1.0 / self.scales_[terms[0]],
+            terms[1]: self.segment_weight_ / self.scales_[terms[1]],
+        }
         return self
 
-    def distances(self, movements: Sequence[Movement]) -> NDArray[np.float64]:
+    def distances(self, movements: Sequence[Trial]) -> NDArray[np.float64]:
         """(n_movements, n_training) weighted DTW costs to the training movements."""
-        self._check_fitted()
-        arms = _arms_of(movements, "predict")
-        if len(arms[0]) != self.n_arms_:
-            raise ValueError(
-                f"predict: movements have {len(arms[0])} arm(s), the classifier was fitted on "
-                f"{self.n_arms_}"
-            )
-        feats = self._features(arms)
-        total = np.zeros((len(arms), self.train_labels_.shape[0]))
+        trials = self._query(movements)
+        if self.method == "histogram":
+            raise ValueError("method='histogram' compares histograms, not distances")
+        feats = self._features(trials)
+        total = np.zeros((len(trials), self.train_labels_.shape[0]))
         for term, w in self.weights_.items():
             if w:
-                total += w * self._term_costs(term, feats[term], self.train_features_[term])
+                total += w * dtw_matrix(feats[term], self.train_features_[term], band=self.band)
         return total
 
-    def predict(self, movements: Sequence[Movement]) -> NDArray[Any]:
+    def predict(self, movements: Sequence[Trial]) -> NDArray[Any]:
         """Label of each movement."""
         if self.method == "histogram":
-            self._check_fitted()
-            return self.histogram_.predict([m[0] for m in _arms_of(movements, "predict")])
+            return self.histogram_.predict(self._query(movements))  # type: ignore[no-any-return]
         return super().predict(movements)
 
-    def predict_proba(self, movements: Sequence[Movement]) -> NDArray[np.float64]:
+    def predict_proba(self, movements: Sequence[Trial]) -> NDArray[np.float64]:
         """Class probabilities, (n, n_classes) in the order of ``classes_``."""
         if self.method == "histogram":
             pred = self.predict(movements)

@@ -26,9 +26,10 @@ takes of the same corpus). In each benchmark:
   time (fraction of the frames where the wrist moves faster than
   :data:`MOVING_SPEED` relative to the shoulder that lie inside a segment).
 * **Reconstruction** of the held-out segments: the paper's total error (each segment
-  rebuilt from its primitive's centre) as an RMS angle error in degrees, at k = 30 and
-  k = 100 primitives; and the whole-movement RMS angle error of the movements rebuilt from
-  consecutive segments' primitives (k = 30).
+  rebuilt from its primitive's centre) as an RMS angle error in degrees (per bone
+  direction for direction features, per angle sample for Z-Y-Z angles), at k = 30 and
+  k = 100 primitives; and the whole-movement RMS angle between the bone directions of each
+  movement and of its rebuilding from consecutive segments' primitives (k = 30).
 
 Every number is computed on held-out groups: nothing is tuned on the group being scored.
 """
@@ -51,8 +52,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from visprim import kernels
-from visprim.classify import DTWClassifier, MotionClassifier, Movement, split_arms
+from visprim.classify import MotionClassifier, arm_directions, dtw_matrix
 from visprim.errors import angular_error_deg
+from visprim.features import from_angles
+from visprim.segment.coverage import DEFAULT_MOVING_SPEED, segment_coverage
 from visprim.trial import Trial
 
 __all__ = [
@@ -63,7 +66,6 @@ __all__ = [
     "Recording",
     "evaluate",
     "find_recordings",
-    "moving_coverage",
     "read_movements",
     "write_report",
 ]
@@ -71,8 +73,8 @@ __all__ = [
 #: Columns usable as leave-one-group-out groups.
 GROUP_COLUMNS: tuple[str, ...] = ("subject", "style", "take")
 #: Wrist speed relative to the shoulder (m/s) above which a frame counts as moving, for the
-#: segmentation coverage (a slow deliberate reach is ~0.3 m/s; sensor noise is far below).
-MOVING_SPEED: float = 0.1
+#: segmentation coverage (:mod:`visprim.segment.coverage`).
+MOVING_SPEED: float = DEFAULT_MOVING_SPEED
 #: Primitive counts of the reconstruction table.
 RECONSTRUCTION_K: tuple[int, ...] = (30, 100)
 #: Frame period every recording is resampled to (s), as in the method (34 ms).
@@ -181,35 +183,12 @@ def find_recordings(
     return found, unlabelled
 
 
-def _read_one(path: Path, period: float) -> Movement:
+def _read_one(path: Path, period: float) -> Trial:
     from visprim.io import read
 
-    try:
-        return read(path, "both", resample=period)
-    except ValueError as exc:
-        if "both" not in str(exc):
-            raise
-    right = read(path, "right", resample=period)
-    left = read(path, "left", resample=period, mirror=True)
-    n = min(right.n_frames, left.n_frames)
-    if right.n_frames != left.n_frames:
-        right, left = (_first_frames(t, n) for t in (right, left))
-    return (right, left)
-
-
-def _first_frames(t: Trial, n: int) -> Trial:
-    return Trial(
-        times=t.times[:n],
-        markers=t.markers[:n],
-        joints=None if t.joints is None else t.joints[:n],
-        body_frame=None if t.body_frame is None else t.body_frame[:n],
-        name=t.name,
-        subject=t.subject,
-        stimulus=t.stimulus,
-        repetitions=t.repetitions,
-        source=t.source,
-        meta=t.meta,
-    )
+    if path.suffix.lower() == ".csv":  # the marker CSV holds one (right) arm
+        return read(path, "right", resample=period)
+    return read(path, "both", resample=period)
 
 
 def read_movements(
@@ -218,12 +197,13 @@ def read_movements(
     period: float = DEFAULT_PERIOD,
     jobs: int | None = None,
     on_progress: Callable[[int], None] | None = None,
-) -> list[Movement]:
-    """Both arms of each recording (the left mirrored to right-arm convention), resampled to
-    ``period`` seconds; ``jobs`` worker processes (default: the number of cores)."""
+) -> list[Trial]:
+    """Each recording as a two-arm trial (``visprim.io.read(path, arm="both")``; marker CSV
+    files hold the right arm only), resampled to ``period`` seconds; ``jobs`` worker
+    processes (default: the number of cores)."""
     paths = [r.path for r in recordings]
     jobs = max(1, jobs if jobs is not None else (os.cpu_count() or 1))
-    out: list[Movement] = []
+    out: list[Trial] = []
     if jobs == 1 or len(paths) < 4:
         for p in paths:
             out.append(_read_one(p, period))
@@ -240,31 +220,13 @@ def read_movements(
     return out
 
 
-def moving_coverage(trial: Trial, segments: NDArray[np.float64]) -> float:
-    """Fraction of the frames where the wrist moves faster than :data:`MOVING_SPEED`
-    relative to the shoulder that lie inside ``segments`` ((n, 2) seconds); NaN for a
-    trial that never moves."""
-    from visprim.ik import implied_joint_centres
-
-    c = trial.joints if trial.joints is not None else implied_joint_centres(trial.markers)
-    rel = c[:, 2] - c[:, 0]
-    speed = np.linalg.norm(np.gradient(rel, trial.times, axis=0), axis=1)
-    moving = speed > MOVING_SPEED
-    if not np.any(moving):
-        return float("nan")
-    inside = np.zeros(trial.n_frames, dtype=bool)
-    for s, e in np.asarray(segments).reshape(-1, 2):
-        inside |= (trial.times >= s) & (trial.times <= e)
-    return float(np.mean(inside[moving]))
-
-
 @dataclass
 class Benchmark:
     """The recordings of one benchmark with their movements, labels and groups."""
 
     name: str
     recordings: list[Recording]
-    movements: list[Movement]
+    movements: list[Trial]
     group_by: str
     left_out_classes: list[str] = field(default_factory=list)
 
@@ -336,6 +298,15 @@ def _total_error_deg(model: Any, vectors: NDArray[np.float64], centers: NDArray[
     return float(np.einsum("ij,ij->", diff, diff)), int(vectors.shape[0])
 
 
+def _direction_rms_deg(angles: NDArray[np.float64], reference: NDArray[np.float64]) -> float:
+    """RMS angle (degrees) between the bone directions of two (T, 4 n_arms) angle arrays:
+    free of the Euler angles' singularity, where γ and α may differ while the arm does not."""
+    a = from_angles(angles, "directions").reshape(angles.shape[0], -1, 3)
+    b = from_angles(reference, "directions").reshape(reference.shape[0], -1, 3)
+    cos = np.clip(np.sum(a * b, axis=2), -1.0, 1.0)
+    return float(np.degrees(np.sqrt(np.mean(np.arccos(cos) ** 2))))
+
+
 def evaluate_benchmark(
     bench: Benchmark,
     *,
@@ -359,9 +330,7 @@ def evaluate_benchmark(
     seconds = {"classifier": 0.0, "baseline": 0.0, "segmentation": 0.0, "reconstruction": 0.0}
 
     t0 = time.perf_counter()
-    base = DTWClassifier(band=template.band)
-    base_feats = base._features([split_arms(m) for m in bench.movements])
-    d_all = kernels_dtw(base_feats, template.band)
+    d_all = dtw_matrix([arm_directions(t) for t in bench.movements], band=template.band)
     seconds["baseline"] += time.perf_counter() - t0
 
     pred = np.empty_like(y)
@@ -372,6 +341,7 @@ def evaluate_benchmark(
     sq = {k: 0.0 for k in RECONSTRUCTION_K}
     n_vec = {k: 0 for k in RECONSTRUCTION_K}
     rms: list[float] = []
+    dims = [0]
     for group in order:
         if on_fold:
             on_fold(f"{bench.name}: {bench.group_by} {group or '-'}")
@@ -389,17 +359,20 @@ def evaluate_benchmark(
         model = clf.model_
         thresholds[group] = float(getattr(model, "seg2_threshold_", None) or float("nan"))
         t0 = time.perf_counter()
-        arm_trials = [t for i in test for t in split_arms(bench.movements[i])]
+        arm_trials = [bench.movements[i] for i in test]
         corpus = model.prepare(arm_trials, tune_seg2=False)
         per_trial = corpus.segments
-        for t, segs in zip(arm_trials, per_trial, strict=True):
-            seg_counts.append(int(segs.shape[0]))
-            coverage.append(moving_coverage(t, segs))
+        seg_counts.extend(int(segs.shape[0]) for segs in per_trial)
+        coverage.extend(segment_coverage(arm_trials, per_trial).tolist())
         seconds["segmentation"] += time.perf_counter() - t0
 
         t0 = time.perf_counter()
         if corpus.segmentation.n_segments:
             vectors = model.vectorize(corpus).vectors
+            # Directions: 3 channels per bone, so the RMS angle of a bone direction is
+            # sqrt(MSE / (d / 3)); angles: the RMS of one angle sample, sqrt(MSE / d).
+            per = 3 if getattr(model, "features", "zyz") == "directions" else 1
+            dims[0] = int(vectors.shape[1]) // per
             train_p = np.ascontiguousarray(model.training_projections_)
             for k in RECONSTRUCTION_K:
                 if k == model.n_primitives:
@@ -420,7 +393,7 @@ def evaluate_benchmark(
                 _, rec, orig = model.reconstruct_movement(t, source="cluster", return_original=True)
             except ValueError:
                 continue
-            rms.append(float(np.degrees(np.sqrt(np.mean((rec - orig) ** 2)))))
+            rms.append(_direction_rms_deg(rec, orig))
         seconds["reconstruction"] += time.perf_counter() - t0
 
     per_group = {}
@@ -432,8 +405,6 @@ def evaluate_benchmark(
             int(m.sum()),
         )
     cov = np.array([c for c in coverage if np.isfinite(c)])
-    dim = 4 * int(template.model_.n_samples) if hasattr(template, "model_") else None
-    dim = dim or 4 * int((template.model_params or {}).get("n_samples", 100))
     return BenchmarkResult(
         name=bench.name,
         group_by=bench.group_by,
@@ -453,7 +424,7 @@ def evaluate_benchmark(
         coverage_min=float(np.min(cov)) if cov.size else float("nan"),
         seg2_thresholds=thresholds,
         reconstruction_deg={
-            k: angular_error_deg(sq[k] / n_vec[k], dim) for k in RECONSTRUCTION_K if n_vec[k]
+            k: angular_error_deg(sq[k] / n_vec[k], dims[0]) for k in RECONSTRUCTION_K if n_vec[k]
         },
         movement_rms_deg=float(np.median(rms)) if rms else float("nan"),
         seconds=seconds,
@@ -465,16 +436,9 @@ def evaluate_benchmark(
     )
 
 
-def kernels_dtw(features: Sequence[NDArray[np.float64]], band: float | None) -> NDArray[np.float64]:
-    """Symmetric DTW costs among per-frame feature sequences."""
-    from visprim.classify import dtw_matrix
-
-    return dtw_matrix(features, band=band)
-
-
 def make_benchmarks(
     recordings: Sequence[Recording],
-    movements: Sequence[Movement],
+    movements: Sequence[Trial],
     *,
     group_by: str | None = None,
     classes: Sequence[str] | None = None,
@@ -612,7 +576,7 @@ def to_markdown(results: Sequence[BenchmarkResult], notes: Sequence[str] = ()) -
     out = ["# visprim evaluate", ""]
     out.append(
         "| benchmark | groups | trials | classes | MotionClassifier | DTW 1-NN baseline | "
-        "segments / arm trial | no segment | coverage median (min) | SEG-2 c per fold | "
+        "segments / trial | no segment | coverage median (min) | SEG-2 c per fold | "
         + " | ".join(f"total error k={k}" for k in RECONSTRUCTION_K)
         + " | movement RMS |"
     )
@@ -633,9 +597,10 @@ def to_markdown(results: Sequence[BenchmarkResult], notes: Sequence[str] = ()) -
         "classifier are learned from the other groups only. Accuracy: fraction of held-out "
         "trials labelled right. Coverage: fraction of moving frames (wrist faster than "
         f"{MOVING_SPEED} m/s relative to the shoulder) inside a segment. Total error: RMS "
-        "angle error of each held-out segment rebuilt from its nearest primitive; movement "
-        "RMS: median over held-out arm trials of the RMS angle error of the movement rebuilt "
-        "from its segments' primitives (k = 30)."
+        "angle error of each held-out segment rebuilt from its nearest primitive (per bone "
+        "direction for direction features, per angle sample for Z-Y-Z angles); movement "
+        "RMS: median over held-out trials of the RMS angle between the bone directions of "
+        "the movement and of its rebuilding from its segments' primitives (k = 30)."
     )
     for r in results:
         out += ["", f"## {r.name}", ""]

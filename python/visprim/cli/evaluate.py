@@ -18,7 +18,7 @@ def run(args: argparse.Namespace) -> int:
             labels=args.labels,
             group_by=args.group,
             classes=classes,
-            classifier=MotionClassifier(band=args.band),
+            classifier=MotionClassifier(method=args.method, band=args.band),
             period=args.resample,
             jobs=args.jobs,
         )
@@ -36,6 +36,8 @@ def run(args: argparse.Namespace) -> int:
 
 def register(sub: Any) -> None:
     """Add the command to ``sub`` (from :meth:`argparse.ArgumentParser.add_subparsers`)."""
+    from visprim.classify import MOTION_METHODS
+
     p = sub.add_parser(
         "evaluate",
         help="benchmark primitives on labelled recordings (leave one group out)",
@@ -53,6 +55,12 @@ def register(sub: Any) -> None:
         help="column holding the groups to leave out (default: subject, else style, else take)",
     )
     p.add_argument("--classes", default=None, help="comma-separated labels to keep (default: all)")
+    p.add_argument(
+        "--method",
+        choices=MOTION_METHODS,
+        default="combined",
+        help="MotionClassifier method (default combined; see help(visprim.MotionClassifier))",
+    )
     p.add_argument(
         "--band",
         type=float,
