@@ -12,6 +12,7 @@ from visprim.evaluate import (
     evaluate_benchmark,
     find_recordings,
     make_benchmarks,
+    read_movements,
     to_html,
     to_markdown,
     write_report,
@@ -59,6 +60,14 @@ def test_labels_from_tables_and_bandai_names(tmp_path: Path) -> None:
         find_recordings([tmp_path / "corpus"], labels=table)
     with pytest.raises(ValueError, match="no such file"):
         find_recordings([tmp_path / "missing"])
+
+
+def test_unreadable_recordings_are_skipped_with_a_reason(tmp_path: Path) -> None:
+    bad = tmp_path / "broken.bvh"
+    bad.write_text("HIERARCHY\nROOT")
+    trials, errors = read_movements([Recording(bad, "x")], jobs=1)
+    assert trials == [None]
+    assert len(errors) == 1 and errors[0].startswith("skipped ") and "broken.bvh" in errors[0]
 
 
 def test_benchmarks_choose_groups_and_drop_unlearnable_classes() -> None:

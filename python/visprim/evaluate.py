@@ -183,12 +183,16 @@ def find_recordings(
     return found, unlabelled
 
 
-def _read_one(path: Path, period: float) -> Trial:
+def _read_one(path: Path, period: float) -> Trial | str:
+    """The recording as a trial, or the one-line reason it cannot be read."""
     from visprim.io import read
 
-    if path.suffix.lower() == ".csv":  # the marker CSV holds one (right) arm
-        return read(path, "right", resample=period)
-    return read(path, "both", resample=period)
+    try:
+        if path.suffix.lower() == ".csv":  # the marker CSV holds one (right) arm
+            return read(path, "right", resample=period)
+        return read(path, "both", resample=period)
+    except ValueError as exc:  # ReadError and bad content: skip the file, say why
+        return str(exc).splitlines()[0] if str(exc) else f"{path}: unreadable"
 
 
 def read_movements(
@@ -197,27 +201,30 @@ def read_movements(
     period: float = DEFAULT_PERIOD,
     jobs: int | None = None,
     on_progress: Callable[[int], None] | None = None,
-) -> list[Trial]:
+) -> tuple[list[Trial | None], list[str]]:
     """Each recording as a two-arm trial (``visprim.io.read(path, arm="both")``; marker CSV
     files hold the right arm only), resampled to ``period`` seconds; ``jobs`` worker
-    processes (default: the number of cores)."""
+    processes (default: the number of cores). Returns ``(trials, errors)``: ``None`` in
+    place of a recording that cannot be read, and one line per such recording."""
     paths = [r.path for r in recordings]
     jobs = max(1, jobs if jobs is not None else (os.cpu_count() or 1))
-    out: list[Trial] = []
+    results: list[Trial | str] = []
     if jobs == 1 or len(paths) < 4:
         for p in paths:
-            out.append(_read_one(p, period))
+            results.append(_read_one(p, period))
             if on_progress:
                 on_progress(1)
-        return out
-    from concurrent.futures import ProcessPoolExecutor
+    else:
+        from concurrent.futures import ProcessPoolExecutor
 
-    with ProcessPoolExecutor(max_workers=jobs) as pool:
-        for m in pool.map(_read_one, paths, [period] * len(paths), chunksize=4):
-            out.append(m)
-            if on_progress:
-                on_progress(1)
-    return out
+        with ProcessPoolExecutor(max_workers=jobs) as pool:
+            for m in pool.map(_read_one, paths, [period] * len(paths), chunksize=4):
+                results.append(m)
+                if on_progress:
+                    on_progress(1)
+    trials = [r if isinstance(r, Trial) else None for r in results]
+    errors = [f"skipped {r}" for r in results if isinstance(r, str)]
+    return trials, errors
 
 
 @dataclass
@@ -511,7 +518,12 @@ def evaluate(
         if not recordings:
             raise ValueError(f"no recording has one of the labels {', '.join(classes)}")
     with tqdm(total=len(recordings), desc="reading", unit="file", disable=disable) as bar:
-        movements = read_movements(recordings, period=period, jobs=jobs, on_progress=bar.update)
+        read_out, errors = read_movements(
+            recordings, period=period, jobs=jobs, on_progress=bar.update
+        )
+    notes.extend(errors)
+    recordings = [r for r, t in zip(recordings, read_out, strict=True) if t is not None]
+    movements = [t for t in read_out if t is not None]
     benches, more = make_benchmarks(recordings, movements, group_by=group_by, classes=classes)
     notes.extend(more)
     n_folds = sum(len(set(b.groups.tolist())) for b in benches)
