@@ -114,3 +114,16 @@ def kmeans_plusplus(
     n_local_trials: int | None = None,
     n_threads: int | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]: ...
+
+# --- dtw ---
+
+def dtw_distances(
+    queries: NDArray[np.float64],
+    query_offsets: NDArray[np.int64],
+    references: NDArray[np.float64] | None = None,
+    reference_offsets: NDArray[np.int64] | None = None,
+    *,
+    band: float | None = None,
+    normalize: bool = True,
+    n_threads: int | None = None,
+) -> NDArray[np.float64]: ...

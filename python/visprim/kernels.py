@@ -433,3 +433,59 @@ def kmeans_plusplus(
     return _visprim.kmeans_plusplus(
         _matrix(x), k, seed=seed, n_local_trials=n_local_trials, n_threads=n_threads
     )
+
+
+# --- dynamic time warping ---
+
+
+def dtw_distances(
+    queries: ArrayLike,
+    query_offsets: ArrayLike,
+    references: ArrayLike | None = None,
+    reference_offsets: ArrayLike | None = None,
+    *,
+    band: float | None = None,
+    normalize: bool = True,
+    n_threads: int | None = None,
+) -> _F64:
+    """Dynamic time warping costs between ragged sets of multichannel sequences.
+
+    The local cost of matching frame ``a_i`` with frame ``b_j`` is their Euclidean distance
+    ``‖a_i − b_j‖`` (in the units of the values); the DTW cost of two sequences is the least
+    sum of local costs along a warping path from the first frames to the last (steps
+    (1, 0), (0, 1), (1, 1)). Pairs are computed in parallel; results do not depend on the
+    number of threads.
+
+    Args:
+        queries: ``(total_frames, dim)`` float64, the query sequences concatenated in time.
+        query_offsets: first frame of each query sequence (integers from 0, strictly
+            increasing, as in :func:`sosfiltfilt_ragged`).
+        references, reference_offsets: the reference set, laid out the same way (same
+            ``dim``). Omit both for the symmetric costs among the queries (each pair computed
+            once, zeros on the diagonal).
+        band: Sakoe–Chiba band half-width as a fraction of the longer sequence's length, in
+            [0, 1], around the diagonal scaled to the two lengths (widened where needed so
+            that a path always exists); ``None`` (default): no band.
+        normalize: divide each cost by the sum of the two lengths (default ``True``), so
+            sequences of different lengths compare on the scale of one frame's distance.
+        n_threads: threads to use (default: all cores).
+
+    Returns:
+        ``(n_queries, n_references)`` float64 costs.
+
+    Raises:
+        TypeError: values not float64 or offsets not integer arrays.
+        ValueError: not 2-D, channel counts differ, invalid offsets, NaN/inf, band outside
+            [0, 1], or only one of ``references`` / ``reference_offsets`` given.
+    """
+    refs = None if references is None else _f64(references)
+    ref_off = None if reference_offsets is None else _offsets(reference_offsets)
+    return _visprim.dtw_distances(
+        _f64(queries),
+        _offsets(query_offsets),
+        refs,
+        ref_off,
+        band=None if band is None else float(band),
+        normalize=bool(normalize),
+        n_threads=n_threads,
+    )

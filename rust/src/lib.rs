@@ -23,6 +23,8 @@ pub mod kmeanspp;
 mod lloyd;
 pub mod sqdist;
 
+pub mod dtw;
+
 pub use error::{Error, Result};
 
 #[cfg(feature = "python")]

@@ -30,6 +30,7 @@ COMMANDS: tuple[str, ...] = (
     "learn",
     "report",
     "classify",
+    "evaluate",
     "simulate",
     "imitate",
     "export-robot",

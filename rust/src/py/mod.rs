@@ -2,6 +2,7 @@
 
 use pyo3::prelude::*;
 
+mod dtw;
 mod errors;
 mod linalg;
 mod signal;
@@ -11,5 +12,6 @@ mod signal;
 fn _visprim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     signal::register(m)?;
     linalg::register(m)?;
+    dtw::register(m)?;
     Ok(())
 }

@@ -9,13 +9,13 @@ from typing import Any
 import numpy as np
 import pytest
 from sklearn.exceptions import NotFittedError
-from visprim.io import read_many
-from visprim.trial import Trial
-from visprim.trial_classifier import (
+from visprim.classify import (
     PrimitiveHistogramClassifier,
     bandai_wave_vs_raise,
     leave_one_group_out,
 )
+from visprim.io import read_many
+from visprim.trial import Trial
 
 
 def _trial(name: str, **meta: Any) -> Trial:

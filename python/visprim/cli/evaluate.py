@@ -1,0 +1,75 @@
+"""``visprim evaluate``: the benchmark of the method on labelled recordings."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+
+def run(args: argparse.Namespace) -> int:
+    from visprim.classify import MotionClassifier
+    from visprim.evaluate import evaluate, to_markdown, write_report
+
+    classes = [c.strip() for c in args.classes.split(",") if c.strip()] if args.classes else None
+    try:
+        results, notes = evaluate(
+            args.data,
+            labels=args.labels,
+            group_by=args.group,
+            classes=classes,
+            classifier=MotionClassifier(method=args.method, band=args.band),
+            period=args.resample,
+            jobs=args.jobs,
+        )
+    except ValueError as exc:
+        print(f"visprim evaluate: {exc}", file=sys.stderr)
+        return 2
+    if not results:
+        print("visprim evaluate: no benchmark to run; " + "; ".join(notes), file=sys.stderr)
+        return 2
+    print(to_markdown(results, notes), end="")
+    paths = write_report(results, notes, args.out)
+    print(f"\nwritten: {', '.join(str(p) for p in paths.values())}")
+    return 0
+
+
+def register(sub: Any) -> None:
+    """Add the command to ``sub`` (from :meth:`argparse.ArgumentParser.add_subparsers`)."""
+    from visprim.classify import MOTION_METHODS
+
+    p = sub.add_parser(
+        "evaluate",
+        help="benchmark primitives on labelled recordings (leave one group out)",
+        description="Leave-one-group-out recognition (MotionClassifier beside a DTW 1-NN "
+        "baseline), segmentation statistics and held-out reconstruction errors on labelled "
+        "recordings. Labels come from labels.tsv beside the data (columns file, label, style, "
+        "subject, take, group, description), from --labels, or from Bandai-Namco file names.",
+    )
+    p.add_argument("data", nargs="+", metavar="DATA", help="recording files or folders")
+    p.add_argument("--labels", default=None, help="a labels table (TSV) for every DATA file")
+    p.add_argument(
+        "--group",
+        choices=("subject", "style", "take"),
+        default=None,
+        help="column holding the groups to leave out (default: subject, else style, else take)",
+    )
+    p.add_argument("--classes", default=None, help="comma-separated labels to keep (default: all)")
+    p.add_argument(
+        "--method",
+        choices=MOTION_METHODS,
+        default="combined",
+        help="MotionClassifier method (default combined; see help(visprim.MotionClassifier))",
+    )
+    p.add_argument(
+        "--band",
+        type=float,
+        default=None,
+        help="Sakoe-Chiba band of the DTW, fraction of the length (default: none)",
+    )
+    p.add_argument(
+        "--resample", type=float, default=0.034, help="frame period in seconds (default 0.034)"
+    )
+    p.add_argument("--jobs", type=int, default=None, help="reader processes (default: cores)")
+    p.add_argument("--out", default="out/evaluate", help="report folder (default out/evaluate)")
+    p.set_defaults(func=run)

@@ -1,0 +1,171 @@
+//! Bindings of the DTW kernel ([`crate::dtw`]).
+//!
+//! Checks the Python arguments (ndarray, dtype float64 / int64, number of dimensions; a copy
+//! when an array is not C-contiguous), runs the kernel with the GIL released (inside an
+//! optional local rayon pool of `n_threads` threads) and hands the result to numpy without a
+//! copy. Value checks (offsets, NaN/inf, band) live in the kernel and come back as
+//! `ValueError`.
+
+use std::borrow::Cow;
+
+use numpy::ndarray::Array2;
+use numpy::{
+    IntoPyArray, PyArray2, PyArrayDescrMethods, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn,
+    PyUntypedArray, PyUntypedArrayMethods,
+};
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+
+use crate::dtw::{self, DtwOptions};
+
+/// A read-only `(frames, dim)` float64 argument.
+struct Frames<'py> {
+    arr: PyReadonlyArrayDyn<'py, f64>,
+    dim: usize,
+}
+
+impl Frames<'_> {
+    fn values(&self) -> Cow<'_, [f64]> {
+        let view = self.arr.as_array();
+        match view.to_slice() {
+            Some(s) => Cow::Borrowed(s),
+            None => Cow::Owned(view.iter().copied().collect()),
+        }
+    }
+}
+
+fn ndarray<'a, 'py>(
+    obj: &'a Bound<'py, PyAny>,
+    name: &str,
+    what: &str,
+) -> PyResult<&'a Bound<'py, PyUntypedArray>> {
+    obj.cast::<PyUntypedArray>().map_err(|_| {
+        let ty = obj
+            .get_type()
+            .name()
+            .map(|n| n.to_string())
+            .unwrap_or_else(|_| "?".into());
+        PyTypeError::new_err(format!(
+            "{name} must be a numpy.ndarray of {what}, got {ty}"
+        ))
+    })
+}
+
+fn frames<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Frames<'py>> {
+    let arr = ndarray(obj, name, "float64")?;
+    if !arr.dtype().is_equiv_to(&numpy::dtype::<f64>(obj.py())) {
+        return Err(PyTypeError::new_err(format!(
+            "{name} must have dtype float64, got {}; convert it with .astype(numpy.float64)",
+            arr.dtype()
+        )));
+    }
+    if arr.ndim() != 2 {
+        return Err(PyValueError::new_err(format!(
+            "{name} must be 2-D (frames, channels), got shape {:?}",
+            arr.shape()
+        )));
+    }
+    let dim = arr.shape()[1];
+    let arr = arr.cast::<PyArrayDyn<f64>>()?.readonly();
+    Ok(Frames { arr, dim })
+}
+
+fn offsets(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i64>> {
+    let arr = ndarray(obj, name, "int64")?;
+    if !arr.dtype().is_equiv_to(&numpy::dtype::<i64>(obj.py())) {
+        return Err(PyTypeError::new_err(format!(
+            "{name} must have dtype int64, got {}; convert it with .astype(numpy.int64)",
+            arr.dtype()
+        )));
+    }
+    if arr.ndim() != 1 {
+        return Err(PyValueError::new_err(format!(
+            "{name} must be 1-D (the first frame of each sequence), got shape {:?}",
+            arr.shape()
+        )));
+    }
+    let arr = arr.cast::<PyArrayDyn<i64>>()?.readonly();
+    Ok(arr.as_array().iter().copied().collect())
+}
+
+/// Run `f` in a local pool of `n_threads` threads (`None`: rayon's global pool).
+fn in_pool<T: Send>(n_threads: Option<usize>, f: impl FnOnce() -> T + Send) -> PyResult<T> {
+    match n_threads {
+        None => Ok(f()),
+        Some(0) => Err(PyValueError::new_err(
+            "n_threads must be ≥ 1 (or None for all cores)",
+        )),
+        Some(t) => {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .map_err(|e| PyValueError::new_err(format!("cannot start {t} threads: {e}")))?;
+            Ok(pool.install(f))
+        }
+    }
+}
+
+/// DTW costs ``(n_queries, n_references)`` between ragged sets of sequences; without
+/// ``references`` the symmetric costs among the queries (each pair computed once).
+#[pyfunction]
+#[pyo3(signature = (
+    queries, query_offsets, references=None, reference_offsets=None,
+    *, band=None, normalize=true, n_threads=None
+))]
+#[allow(clippy::too_many_arguments)]
+fn dtw_distances<'py>(
+    py: Python<'py>,
+    queries: &Bound<'py, PyAny>,
+    query_offsets: &Bound<'py, PyAny>,
+    references: Option<&Bound<'py, PyAny>>,
+    reference_offsets: Option<&Bound<'py, PyAny>>,
+    band: Option<f64>,
+    normalize: bool,
+    n_threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let options = DtwOptions { band, normalize };
+    let q = frames(queries, "queries")?;
+    let qo = offsets(query_offsets, "query_offsets")?;
+    let qv = q.values();
+    let qv: &[f64] = &qv;
+    let dim = q.dim;
+    let (rows, cols, out) = match (references, reference_offsets) {
+        (None, None) => {
+            let n = qo.len();
+            let out =
+                py.detach(|| in_pool(n_threads, || dtw::dtw_pairwise(qv, &qo, dim, &options)))??;
+            (n, n, out)
+        }
+        (Some(r), Some(ro)) => {
+            let r = frames(r, "references")?;
+            if r.dim != dim {
+                return Err(PyValueError::new_err(format!(
+                    "references have {} channels but queries have {dim}",
+                    r.dim
+                )));
+            }
+            let ro = offsets(ro, "reference_offsets")?;
+            let rv = r.values();
+            let rv: &[f64] = &rv;
+            let out = py.detach(|| {
+                in_pool(n_threads, || {
+                    dtw::dtw_cross(qv, &qo, rv, &ro, dim, &options)
+                })
+            })??;
+            (qo.len(), ro.len(), out)
+        }
+        _ => {
+            return Err(PyValueError::new_err(
+                "give both references and reference_offsets, or neither",
+            ))
+        }
+    };
+    Ok(Array2::from_shape_vec((rows, cols), out)
+        .expect("kernel output has the announced shape")
+        .into_pyarray(py))
+}
+
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(dtw_distances, m)?)?;
+    Ok(())
+}

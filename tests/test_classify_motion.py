@@ -1,0 +1,93 @@
+"""Whole-movement classifiers (MotionClassifier, DTWClassifier) on synthetic arm movements."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from _motion_data import movements as _data
+from sklearn.base import clone
+from sklearn.exceptions import NotFittedError
+from visprim.classify import (
+    DTWClassifier,
+    MotionClassifier,
+    arm_directions,
+    primitive_coordinates,
+    reconstructed_directions,
+)
+from visprim.trial import Trial
+
+SMALL_MODEL = {"n_samples": 20, "n_components": 5, "n_clusters": 4, "n_init": 1}
+
+
+def test_motion_classifier_separates_distinct_movements() -> None:
+    train, y = _data(4, seed=0)
+    test, truth = _data(2, seed=1)
+    clf = MotionClassifier(model_params=SMALL_MODEL).fit(train, y)
+    assert list(clf.classes_) == ["raise", "sweep", "wave"]
+    assert clf.window_seconds_ > 0
+    assert clf.score(test, truth) == 1.0
+    proba = clf.predict_proba(test)
+    assert proba.shape == (6, 3)
+    np.testing.assert_allclose(proba.sum(axis=1), 1.0)
+    # Deterministic, and clone gives an unfitted copy with the same parameters.
+    again = clone(clf)
+    assert again.get_params() == clf.get_params()
+    assert not hasattr(again, "model_")
+    np.testing.assert_array_equal(again.fit(train, y).predict(test), clf.predict(test))
+
+
+@pytest.mark.parametrize("method", ["coordinates", "segments", "histogram"])
+def test_other_methods_run_and_beat_chance(method: str) -> None:
+    train, y = _data(4, seed=0)
+    test, truth = _data(2, seed=1)
+    clf = MotionClassifier(model_params=SMALL_MODEL, method=method).fit(train, y)
+    assert clf.predict(test).shape == (6,)
+    assert clf.score(test, truth) > 1 / 3
+
+
+def test_dtw_baseline_and_feature_shapes() -> None:
+    train, y = _data(3, seed=0)
+    test, truth = _data(2, seed=2)
+    base = DTWClassifier(band=0.2).fit(train, y)
+    assert base.score(test, truth) == 1.0
+    d = base.distances(test)
+    assert d.shape == (6, 9) and np.all(d >= 0)
+    trial = train[0]
+    dirs = arm_directions(trial)
+    assert dirs.shape == (trial.n_frames, 12)
+    np.testing.assert_allclose(np.linalg.norm(dirs.reshape(-1, 4, 3), axis=2), 1.0)
+    clf = MotionClassifier(model_params=SMALL_MODEL).fit(train, y)
+    coords = primitive_coordinates(clf.model_, [trial], clf.window_seconds_)[0]
+    assert coords.shape == (trial.n_frames, 5)
+    rec = reconstructed_directions(clf.model_, [trial], clf.window_seconds_)[0]
+    assert rec.shape == dirs.shape
+    np.testing.assert_allclose(np.linalg.norm(rec.reshape(-1, 4, 3), axis=2), 1.0)
+    # The basis rebuilds this training movement's right upper arm closely (same axes as
+    # arm_directions up to the shoulder frame's sign flip of y and z).
+    flip = np.array([1.0, -1.0, -1.0])
+    err = np.linalg.norm(rec[:, :3] * flip - dirs[:, :3], axis=1)
+    assert np.median(err) < 0.1
+
+
+def test_errors() -> None:
+    train, y = _data(2, seed=0)
+    with pytest.raises(NotFittedError):
+        MotionClassifier().predict(train)
+    with pytest.raises(NotFittedError):
+        DTWClassifier().predict(train)
+    with pytest.raises(ValueError, match="method"):
+        MotionClassifier(method="svm").fit(train, y)
+    with pytest.raises(ValueError, match="labels"):
+        DTWClassifier().fit(train, y[:-1])
+    with pytest.raises(ValueError, match="two different labels"):
+        DTWClassifier().fit(train[:2], ["a", "a"])
+    with pytest.raises(ValueError, match="band"):
+        DTWClassifier(band=2.0).fit(train, y)
+    fitted = DTWClassifier().fit(train, y)
+    right_only = Trial(times=train[0].times, markers=train[0].markers[:, :4])
+    with pytest.raises(ValueError, match="arms"):
+        fitted.predict([right_only])
+    with pytest.raises(ValueError, match="different arms"):
+        DTWClassifier().fit([train[0], right_only], ["a", "b"])
+    with pytest.raises(TypeError, match="expected visprim.Trial"):
+        fitted.predict([1, 2])  # type: ignore[list-item]

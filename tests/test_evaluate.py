@@ -1,0 +1,137 @@
+"""The labelled-data benchmark (visprim.evaluate, `visprim evaluate`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from _motion_data import movements
+from visprim.classify import MotionClassifier
+from visprim.evaluate import (
+    Recording,
+    evaluate_benchmark,
+    find_recordings,
+    make_benchmarks,
+    read_movements,
+    to_html,
+    to_markdown,
+    write_report,
+)
+
+SMALL_MODEL = {"n_samples": 20, "n_components": 5, "n_clusters": 4, "n_init": 1}
+
+
+def _touch(folder: Path, *names: str) -> None:
+    folder.mkdir(parents=True, exist_ok=True)
+    for n in names:
+        (folder / n).write_text("")
+
+
+def test_labels_from_tables_and_bandai_names(tmp_path: Path) -> None:
+    _touch(tmp_path / "corpus", "a1.bvh", "a2.bvh", "b1.bvh", "other.bvh", "README.md")
+    (tmp_path / "corpus" / "labels.tsv").write_text(
+        "file\tlabel\tstyle\tsubject\ttake\tgroup\tdescription\n"
+        "a1.bvh\twave\tfast\tx\t1\tarm\t\n"
+        "a2.bvh\twave\tslow\ty\t2\tarm\t\n"
+        "b1.bvh\traise\tslow\tx\t1\tarm\t\n"
+    )
+    _touch(tmp_path / "corpus_extra", "dataset-2_wave-right-hand_elderly_004.bvh")
+    recs, unlabelled = find_recordings([tmp_path])
+    assert [p.name for p in unlabelled] == ["other.bvh"]
+    by_name = {r.path.name: r for r in recs}
+    assert by_name["a2.bvh"] == Recording(
+        tmp_path / "corpus" / "a2.bvh", "wave", "slow", "y", "2", "corpus"
+    )
+    bandai = by_name["dataset-2_wave-right-hand_elderly_004.bvh"]
+    assert (bandai.label, bandai.style, bandai.take, bandai.benchmark) == (
+        "wave-right-hand",
+        "elderly",
+        "004",
+        "corpus",
+    )
+    # A labels file given explicitly replaces the tables beside the data.
+    table = tmp_path / "mine.tsv"
+    table.write_text("file\tlabel\tsubject\nother.bvh\tjump\tz\n")
+    recs, unlabelled = find_recordings([tmp_path / "corpus"], labels=table)
+    assert [(r.path.name, r.label, r.subject) for r in recs] == [("other.bvh", "jump", "z")]
+    assert len(unlabelled) == 3
+    table.write_text("name\tlabel\nother.bvh\tjump\n")
+    with pytest.raises(ValueError, match="file"):
+        find_recordings([tmp_path / "corpus"], labels=table)
+    with pytest.raises(ValueError, match="no such file"):
+        find_recordings([tmp_path / "missing"])
+
+
+def test_unreadable_recordings_are_skipped_with_a_reason(tmp_path: Path) -> None:
+    bad = tmp_path / "broken.bvh"
+    bad.write_text("HIERARCHY\nROOT")
+    trials, errors = read_movements([Recording(bad, "x")], jobs=1)
+    assert trials == [None]
+    assert len(errors) == 1 and errors[0].startswith("skipped ") and "broken.bvh" in errors[0]
+
+
+def test_benchmarks_choose_groups_and_drop_unlearnable_classes() -> None:
+    def rec(label: str, subject: str, style: str) -> Recording:
+        return Recording(Path(f"{label}{subject}{style}.bvh"), label, style, subject, "", "b")
+
+    recs = [rec("a", "s1", "x"), rec("a", "s2", "x"), rec("b", "s1", "y"), rec("b", "s2", "y")]
+    recs.append(rec("c", "s1", "x"))  # only one subject: can never be recognised
+    benches, notes = make_benchmarks(recs, list(range(len(recs))))  # type: ignore[arg-type]
+    assert len(benches) == 1 and benches[0].group_by == "subject"
+    assert benches[0].left_out_classes == ["c"] and "left out c" in notes[0]
+    benches, notes = make_benchmarks(recs, list(range(5)), group_by="style")  # type: ignore[arg-type]
+    assert benches == [] and "skipped" in notes[-1]
+    with pytest.raises(ValueError, match="group"):
+        make_benchmarks(recs, list(range(5)), group_by="colour")  # type: ignore[arg-type]
+
+
+def test_evaluate_benchmark_on_synthetic_movements(tmp_path: Path) -> None:
+    data, labels = movements(3, seed=0)
+    groups = ["g1", "g2", "g3"]
+    recs = [
+        Recording(Path(f"m{i}.bvh"), lab, "", groups[i // 3], "", "synthetic")
+        for i, lab in enumerate(labels)
+    ]
+    benches, notes = make_benchmarks(recs, data)
+    assert notes == [] and benches[0].group_by == "subject"
+    res = evaluate_benchmark(benches[0], classifier=MotionClassifier(model_params=SMALL_MODEL))
+    assert res.n_trials == 9 and res.classes == ["raise", "sweep", "wave"]
+    assert res.accuracy == 1.0 and res.baseline_accuracy == 1.0
+    assert res.confusion.trace() == 9 and res.baseline_confusion.sum() == 9
+    assert res.n_arm_trials == 9 and set(res.seg2_thresholds) == set(groups)
+    assert res.segments_per_trial > 0
+    assert 0.0 <= res.coverage_min <= res.coverage_median <= 1.0
+    # k = 30 and 100 primitives need more training segments than these few movements have.
+    assert res.reconstruction_deg == {}
+    md = to_markdown([res], ["a note"])
+    assert "| synthetic | 3 subject | 9 | 3 | **1.000** | 1.000 |" in md
+    assert "| - | - |" in md
+    assert "- a note" in md
+    page = to_html(md)
+    assert page.count("<table>") == 3 and "<b>1.000</b>" in page
+    paths = write_report([res], [], tmp_path / "out")
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == sorted(
+        p.name for p in paths.values()
+    )
+    summary = paths["summary"].read_text().splitlines()
+    assert summary[0].startswith("benchmark,group_by,trials,classes,groups,accuracy,")
+    assert len(paths["predictions"].read_text().splitlines()) == 10
+
+
+def test_cli_on_bandai_recordings(shared_data: Path, tmp_path: Path) -> None:
+    """`visprim evaluate` end to end on the 34 original Bandai dataset-2 takes (labels from
+    the file names; 4 gestures, leave one of 7 styles out)."""
+    from visprim.cli.main import main
+
+    out = tmp_path / "report"
+    assert main(["evaluate", str(shared_data / "bandai_namco_ds2"), "--out", str(out)]) == 0
+    summary = (out / "summary.csv").read_text().splitlines()
+    assert len(summary) == 2
+    row = dict(zip(summary[0].split(","), summary[1].split(","), strict=True))
+    assert row["benchmark"] == "bandai_namco_ds2" and row["group_by"] == "style"
+    assert (row["trials"], row["classes"], row["groups"]) == ("34", "4", "7")
+    # Chance is 0.25; both classifiers see both arms (right- vs both-hand gestures).
+    assert float(row["accuracy"]) >= 0.75
+    assert float(row["dtw_baseline_accuracy"]) >= 0.5
+    assert "<table>" in (out / "evaluate.html").read_text()
+    assert main(["evaluate", str(tmp_path / "nothing")]) == 2
