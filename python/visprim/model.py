@@ -222,6 +222,7 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         y: Any = None,
         *,
         source: dict[str, Any] | None = None,
+        client: Any = None,
     ) -> PrimitiveModel:
         """Learn the primitives from ``trials`` (a list of :class:`~visprim.trial.Trial`).
 
@@ -229,11 +230,21 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         the trials again (e.g. ``{"kind": "generated", ...}`` or ``{"kind": "files",
         "paths": [...]}``) so that ``visprim report`` can redraw the trial figures.
 
+        ``trials`` may also be a lazy corpus (:class:`visprim.io.Corpus`,
+        :class:`visprim.io.corpus.GeneratedCorpus`), learned in bounded memory, and
+        ``client`` a Dask client, scheduler address or ``True`` (local cluster) to learn
+        on a cluster (``pip install visprim[dask]``); see :mod:`visprim.scale`. Those fits
+        keep no ``training_vectors_``.
+
         Raises
         ------
         ValueError
             Bad parameters, an empty corpus, fewer segments than ``n_clusters`` (or than 2).
         """
+        if client is not None or hasattr(trials, "chunk_ranges"):
+            from visprim.scale import fit_corpus
+
+            return fit_corpus(self, trials, client=client, source=source)  # type: ignore[no-any-return]
         self._validate_params()
         trials = _as_trials(trials)
         for attr in [a for a in vars(self) if a.endswith("_") and not a.startswith("_")]:
@@ -258,34 +269,65 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
                 "lower n_clusters or give more trials"
             )
         basis = fit_pca(sv.vectors)
-        f = int(self.n_components)
-        p = basis.project(sv.vectors, f)
-        km = kernels.kmeans(
-            np.ascontiguousarray(p),
-            int(self.n_clusters),
-            n_init=int(self.n_init),
-            max_iter=int(self.max_iter),
-            tol=float(self.tol),
-            seed=int(self.seed),
+        return self._set_fitted(
+            basis,
+            basis.project(sv.vectors, int(self.n_components)),
+            trial=sv.trial,
+            starts=sv.starts,
+            ends=sv.ends,
+            seg2_threshold=corpus.seg2_threshold if corpus is not None else None,
+            trial_names=list(corpus.names) if corpus is not None else [],
+            vectors=sv.vectors,
+            source=source,
         )
+
+    def _set_fitted(
+        self,
+        basis: PCABasis,
+        projections: NDArray[np.float64] | None,
+        *,
+        trial: NDArray[np.int64],
+        starts: NDArray[np.float64],
+        ends: NDArray[np.float64],
+        seg2_threshold: float | None,
+        trial_names: list[str],
+        vectors: NDArray[np.float64] | None,
+        source: dict[str, Any] | None,
+        clusters: tuple[NDArray[np.float64], NDArray[np.int64], float, int] | None = None,
+    ) -> PrimitiveModel:
+        """Store the fitted state: the PCA ``basis``, k-means of the (N, f) ``projections``
+        (or the given ``clusters`` = centres, labels, inertia, iterations) and where the N
+        segments came from. Shared by the in-memory and the corpus fits
+        (:mod:`visprim.scale`)."""
+        if clusters is None:
+            km = kernels.kmeans(
+                np.ascontiguousarray(projections),
+                int(self.n_clusters),
+                n_init=int(self.n_init),
+                max_iter=int(self.max_iter),
+                tol=float(self.tol),
+                seed=int(self.seed),
+            )
+            clusters = (km.centers, km.labels, km.inertia, km.n_iter)
+        centers, labels, inertia, n_iter = clusters
         self.mean_ = basis.mean
         self.eigenvalues_ = basis.eigenvalues
         self.eigenvectors_ = basis.eigenvectors
-        self.n_training_segments_ = n
-        self.cluster_centers_ = np.asarray(km.centers, dtype=np.float64)
-        self.labels_ = np.asarray(km.labels, dtype=np.int64)
-        self.inertia_ = float(km.inertia)
-        self.n_iter_ = int(km.n_iter)
-        self.segment_trial_ = sv.trial
-        self.segment_starts_ = sv.starts
-        self.segment_ends_ = sv.ends
+        self.n_training_segments_ = int(trial.shape[0])
+        self.cluster_centers_ = np.asarray(centers, dtype=np.float64)
+        self.labels_ = np.asarray(labels, dtype=np.int64)
+        self.inertia_ = float(inertia)
+        self.n_iter_ = int(n_iter)
+        self.segment_trial_ = trial
+        self.segment_starts_ = starts
+        self.segment_ends_ = ends
         self.primitive_durations_ = _mean_durations(
-            sv.durations, self.labels_, int(self.n_clusters)
+            ends - starts, self.labels_, int(self.n_clusters)
         )
-        self.seg2_threshold_ = corpus.seg2_threshold if corpus is not None else None
-        self.trial_names_ = list(corpus.names) if corpus is not None else []
-        self.training_vectors_: NDArray[np.float64] | None = sv.vectors
-        self.training_projections_: NDArray[np.float64] | None = p
+        self.seg2_threshold_ = seg2_threshold
+        self.trial_names_ = trial_names
+        self.training_vectors_: NDArray[np.float64] | None = vectors
+        self.training_projections_: NDArray[np.float64] | None = projections
         self.error_tables_: ErrorTables | None = None
         self.training_source_ = dict(source or {})
         return self

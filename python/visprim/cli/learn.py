@@ -13,6 +13,8 @@ from visprim.cli import common
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.dask is not None or args.stream:
+        return _run_corpus(args)
     from visprim.modelfile import save_model
     from visprim.progress import stages
 
@@ -32,6 +34,40 @@ def run(args: argparse.Namespace) -> int:
     print(common.summary(model, len(trials)))
     print()
     print(tables.to_markdown())
+    print(f"model written to {path}")
+    return 0
+
+
+def _run_corpus(args: argparse.Namespace) -> int:
+    """Learn from a lazy corpus: streaming (``--stream``) or on Dask (``--dask``)."""
+    from visprim.io.corpus import Corpus, GeneratedCorpus
+    from visprim.modelfile import save_model
+
+    data = list(args.data or [])
+    if data and args.generated:
+        raise SystemExit("visprim: give DATA files or --generated, not both")
+    try:
+        corpus = (
+            Corpus(data, resample=args.resample)
+            if data
+            else GeneratedCorpus(args.subjects, args.stimuli, args.data_seed)
+        )
+    except ValueError as exc:
+        raise SystemExit(f"visprim: {exc}") from None
+    model = common.model_from_args(args)
+    client: Any = None if args.dask is None else (args.dask or True)
+    how = "streaming" if client is None else f"Dask ({args.dask or 'local cluster'})"
+    try:
+        model.fit(corpus, client=client)
+    except ValueError as exc:
+        hint = " (option --clusters)" if "n_clusters=" in str(exc) else ""
+        raise SystemExit(f"visprim learn: {exc}{hint}") from None
+    except (ImportError, RuntimeError, OSError) as exc:
+        raise SystemExit(f"visprim learn: {exc}") from None
+    path = save_model(model, args.out)
+    print(f"learned by {how} from {len(corpus)} items")
+    print(common.summary(model, len(model.trial_names_)))
+    print("(error tables need the training vectors: run learn without --dask/--stream)")
     print(f"model written to {path}")
     return 0
 
@@ -65,6 +101,20 @@ def register(sub: Any) -> None:
         action="store_const",
         const=None,
         help="keep each recording's own frame rate",
+    )
+    p.add_argument(
+        "--dask",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="ADDRESS",
+        help="learn on a Dask cluster: the scheduler's ADDRESS (tcp://host:8786), or a local "
+        "cluster without it (needs pip install 'visprim[dask]'); no error tables",
+    )
+    p.add_argument(
+        "--stream",
+        action="store_true",
+        help="learn in bounded memory, reading DATA in chunks (no error tables)",
     )
     common.add_generated_options(p)
     common.add_model_options(p)
