@@ -5,12 +5,12 @@ segments) or ``--segments 100000`` for a shorter run; ``--repeat 3`` repeats eve
 reports the median and the spread (min–max).
 
 Corpus. A pool of ``--pool`` distinct generated trials (:func:`visprim.datasets.
-imitation_experiment`, 200 stimuli per subject) is written once as one ``.npz`` file per
-trial in ``--data`` (default: a temporary folder); the benchmark corpus is a lazy corpus
-whose item ``i`` is read from disk (``numpy.load``) from pool file ``i mod pool`` and named
-uniquely. Reading is part of every timing; generating is not (it costs ~9 ms per trial,
-which would make a 10^6-segment corpus take an hour to generate: the pool keeps the
-benchmark about the learner).
+imitation_experiment`, 200 stimuli per subject) is written once as one raw float64 file per
+trial in ``--data`` (default: a temporary folder; ``[T, repetitions, times (T), markers
+(T × 12)]``); the benchmark corpus is a lazy corpus whose item ``i`` is read from disk
+(``numpy.fromfile``) from pool file ``i mod pool`` and named uniquely. Reading is part of
+every timing; generating is not (it costs ~9 ms per trial, which would make a 10^6-segment
+corpus take an hour to generate: the pool keeps the benchmark about the learner).
 
 Modes, each in its own process (peak RSS from ``getrusage``; Dask: the client process plus
 the largest worker):
@@ -54,22 +54,17 @@ MB = 1024.0 * 1024.0
 
 
 def write_pool(folder: Path, n_trials: int) -> None:
-    """``n_trials`` generated trials as ``pool_XXXXX.npz`` (times, markers, repetitions)."""
+    """``n_trials`` generated trials as ``<name>.f64``: T, repetitions, times, markers."""
     from visprim.datasets import imitation_experiment
 
     folder.mkdir(parents=True, exist_ok=True)
-    if len(list(folder.glob("pool_*.npz"))) == n_trials:
+    if len(list(folder.glob("*.f64"))) == n_trials:
         return
     n_stimuli = 200
     trials = imitation_experiment(math.ceil(n_trials / n_stimuli), n_stimuli, seed=0)[:n_trials]
-    for i, t in enumerate(trials):
-        np.savez(
-            folder / f"pool_{i:05d}.npz",
-            times=t.times,
-            markers=t.markers,
-            repetitions=t.repetitions,
-            name=t.name,
-        )
+    for t in trials:
+        head = np.array([t.n_frames, t.repetitions], dtype=np.float64)
+        np.concatenate([head, t.times, t.markers.ravel()]).tofile(folder / f"{t.name}.f64")
 
 
 def pool_corpus(folder: Path, n_items: int) -> Any:
@@ -87,21 +82,23 @@ def pool_corpus(folder: Path, n_items: int) -> Any:
 
         def read_item(self, index: int) -> list[Trial]:
             i = self._index(index)
-            with np.load(self.files[i % len(self.files)]) as z:
-                return [
-                    Trial(
-                        times=z["times"],
-                        markers=z["markers"],
-                        repetitions=int(z["repetitions"]),
-                        name=f"{z['name']}_{i // len(self.files)}",
-                    )
-                ]
+            path = self.files[i % len(self.files)]
+            raw = np.fromfile(path, dtype=np.float64)
+            n = int(raw[0])
+            return [
+                Trial(
+                    times=raw[2 : 2 + n],
+                    markers=raw[2 + n :].reshape(n, 4, 3),
+                    repetitions=int(raw[1]),
+                    name=f"{Path(path).stem}_{i // len(self.files)}",
+                )
+            ]
 
         @property
         def source(self) -> dict[str, Any]:
             return {"kind": "benchmark pool", "items": self.n}
 
-    files = sorted(str(p) for p in folder.glob("pool_*.npz"))
+    files = sorted(str(p) for p in folder.glob("*.f64"))
     return PoolCorpus(files, n_items)
 
 

@@ -375,8 +375,7 @@ def _lloyd_task(
         return np.zeros((k, f)), np.zeros(k), 0.0
     labels, dist = kernels.kmeans_predict(p, centers, n_threads=1)
     counts = np.bincount(labels, minlength=k).astype(np.float64)
-    sums = np.zeros((k, f))
-    np.add.at(sums, labels, p)
+    sums = np.stack([np.bincount(labels, weights=p[:, j], minlength=k) for j in range(f)], 1)
     return sums, counts, float(np.dot(dist, dist))
 
 
