@@ -49,10 +49,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 from sklearn.base import clone
+from tqdm.auto import tqdm
 
 from visprim import kernels
 from visprim.io.corpus import LazyCorpus, sample_items, trial_names
 from visprim.pca import PCABasis
+from visprim.progress import _disable
 from visprim.segment.seg2 import _MAX_TRIALS
 from visprim.trial import Trial
 
@@ -268,6 +270,7 @@ def fit_streaming(
     segs = _Segments.empty()
     acc = kernels.CovarianceAccumulator(settings.dim)
     tmp = Path(tempfile.mkdtemp(prefix="visprim-fit-", dir=spill_dir))
+    bar = tqdm(total=len(corpus), desc="learn", unit="item", disable=_disable(), leave=False)
     try:
         files = []
         for j, items in enumerate(corpus.chunk_ranges(chunk_size)):
@@ -277,6 +280,7 @@ def fit_streaming(
                 acc.update(block.vectors)
                 files.append(tmp / f"{j:08d}.npy")
                 np.save(files[-1], block.vectors)
+            bar.update(len(items))
         n = int(acc.count)
         _check_count(model, n)
         basis = _basis(acc, n)
@@ -289,6 +293,7 @@ def fit_streaming(
             row += p.shape[0]
             path.unlink()
     finally:
+        bar.close()
         shutil.rmtree(tmp, ignore_errors=True)
     return _finish(model, basis, projections, segs, threshold, dict(source or corpus.source))
 
@@ -518,10 +523,12 @@ def _kmeans_dask(
         seed=int(model.seed),
     )
     centers = np.asarray(seeded.centers, dtype=np.float64)
+    groups, members = _group_by_worker(client, projs)
+    del projs
     tol = float(model.tol) * float(np.mean(variances))
     n_iter = 0
     for n_iter in range(1, int(model.max_iter) + 1):  # noqa: B007 (reported after the loop)
-        parts = client.gather([client.submit(_lloyd_task, p, centers, pure=False) for p in projs])
+        parts = client.gather([client.submit(_lloyd_task, g, centers, pure=False) for g in groups])
         sums = np.sum([s for s, _, _ in parts], axis=0)
         counts = np.sum([c for _, c, _ in parts], axis=0)
         new = np.where(counts[:, None] > 0, sums / np.maximum(counts, 1)[:, None], centers)
@@ -529,7 +536,42 @@ def _kmeans_dask(
         centers = new
         if shift <= tol:
             break
-    final = client.gather([client.submit(_assign_task, p, centers, pure=False) for p in projs])
-    labels = np.concatenate([lab for lab, _ in final])
+    final = client.gather([client.submit(_assign_task, g, centers, pure=False) for g in groups])
+    labels = np.empty(n, dtype=np.int64)
+    for (lab, _), idx in zip(final, members, strict=True):
+        sizes = [rows[i + 1] - rows[i] for i in idx]
+        for i, part in zip(idx, np.split(lab, np.cumsum(sizes)[:-1]), strict=True):
+            labels[rows[i] : rows[i + 1]] = part
     inertia = float(sum(i for _, i in final))
     return centers, labels, inertia, n_iter
+
+
+def _concat_task(*parts: NDArray[np.float64]) -> NDArray[np.float64]:
+    return np.concatenate(parts)
+
+
+def _group_by_worker(client: Any, projs: list[Any]) -> tuple[list[Any], list[list[int]]]:
+    """One array of projections per worker (concatenated where they are), so that each
+    Lloyd iteration is one task per worker; returns the futures and the partitions (in
+    corpus order) each one holds."""
+    from distributed import wait
+
+    wait(projs)
+    where = client.who_has(projs)
+    by_worker: dict[str, list[int]] = {}
+    for i, fut in enumerate(projs):
+        holders = sorted(where.get(fut.key, ())) or [""]
+        by_worker.setdefault(holders[0], []).append(i)
+    groups, members = [], []
+    for worker, idx in by_worker.items():
+        groups.append(
+            client.submit(
+                _concat_task,
+                *[projs[i] for i in idx],
+                pure=False,
+                workers=[worker] if worker else None,
+                allow_other_workers=True,
+            )
+        )
+        members.append(idx)
+    return groups, members
