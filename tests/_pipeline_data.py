@@ -24,8 +24,8 @@ def default_trials() -> tuple[Trial, ...]:
 
 @cache
 def fitted(segmentation: str = "seg2", n_clusters: int = 30) -> PrimitiveModel:
-    """A model fitted on :func:`default_trials` (do not mutate it)."""
-    model = PrimitiveModel(segmentation=segmentation, n_clusters=n_clusters)
+    """A model of the paper's method fitted on :func:`default_trials` (do not mutate it)."""
+    model = PrimitiveModel.paper(segmentation=segmentation, n_clusters=n_clusters)
     return model.fit(list(default_trials()), source=dict(SOURCE))
 
 

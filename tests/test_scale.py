@@ -61,6 +61,13 @@ def test_generated_corpus_gives_the_experiments_trials(trials):
         corpus.read([len(trials)])
 
 
+def test_paper_method_streaming_equals_in_memory(trials):
+    a = PrimitiveModel.paper(**PARAMS).fit(trials)
+    b = PrimitiveModel.paper(**PARAMS).fit(GeneratedCorpus(N_SUBJECTS, N_STIMULI, seed=1))
+    assert_same_fit(a, b)
+    assert b.dim == 400 and b.n_trials_without_segments_ == a.n_trials_without_segments_
+
+
 @pytest.mark.parametrize("chunk", [1, 7, 1000])
 def test_streaming_fit_equals_the_in_memory_fit(in_memory, chunk):
     corpus = GeneratedCorpus(N_SUBJECTS, N_STIMULI, seed=1)
@@ -104,8 +111,8 @@ def test_save_and_load_a_streamed_model(tmp_path):
 
 def test_seg2_is_tuned_on_the_in_memory_fits_sample(trials):
     """With more trials than the tuning limit, the streamed sample is the one the in-memory
-    tuning subsets (checked with a small limit)."""
-    model = PrimitiveModel(**PARAMS)
+    tuning subsets (checked with a small limit; the paper's tuning from repetitions)."""
+    model = PrimitiveModel.paper(**PARAMS)
     prepared = prepare_corpus(trials, seg2_threshold=1.0)
     z = speed_squared_concatenated(prepared.times_all, prepared.angles_all, prepared.offsets)
     reps = np.array([t.repetitions for t in trials])

@@ -52,6 +52,7 @@ from visprim.trial import Trial
 
 __all__ = [
     "DEFAULT_SINGULAR_ANGLE",
+    "angles_from_directions",
     "arm_angles",
     "arm_angles_corpus",
     "implied_joint_centres",
@@ -125,6 +126,10 @@ def arm_angles(
         coincide; the message names the trial (if any), the argument and the frame.
     """
     where = "markers"
+    if isinstance(markers_or_trial, Trial) and markers_or_trial.n_arms > 1:
+        if joints is not None or body_frame is not None or times is not None:
+            raise ValueError("joints/body_frame/times overrides apply to one-arm trials only")
+        return arm_angles_corpus([markers_or_trial], singular_angle=singular_angle)[0]
     if isinstance(markers_or_trial, Trial):
         trial = markers_or_trial
         where = f"trial {trial.name or trial.source or '?'!r}"
@@ -153,23 +158,27 @@ def arm_angles_corpus(
 
     Equivalent to ``[arm_angles(t) for t in trials]`` (each trial's joints/body_frame used
     when present) but with one numpy pass over all frames; only trials that touch a singular
-    cone get a per-trial interpolation step.
+    cone get a per-trial interpolation step. Trials of several arms (``trial.arms``, e.g.
+    ``("right", "left")``) get 4 angles per arm, arm by arm; a left arm is mirrored in the
+    body frame (y → −y) so that its angles follow the right arm's convention. All trials
+    must have the same arms.
 
     Returns
     -------
-    list of (T_i, 4) float64 arrays, radians (views into one concatenated array).
+    list of (T_i, 4 n_arms) float64 arrays, radians (views into one concatenated array).
     """
     if not trials:
         return []
+    arms = trials[0].arms
+    for t in trials:
+        if t.arms != arms:
+            raise ValueError(
+                f"trial {t.name or t.source!r} has arms {list(t.arms)} where the first trial "
+                f"has {list(arms)}; read all trials with the same arm= option"
+            )
     names = [f"trial {t.name or t.source or i!r}" for i, t in enumerate(trials)]
     lengths = np.array([t.n_frames for t in trials], dtype=np.int64)
     offsets = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
-    # Trial validated its markers (shape, finite); implied centres for all frames at once,
-    # then the recordings' own joint centres where they have them.
-    centres = implied_joint_centres(np.concatenate([t.markers for t in trials]))
-    for k, t in enumerate(trials):
-        if t.joints is not None:
-            centres[offsets[k] : offsets[k] + lengths[k]] = t.joints
     if any(t.body_frame is not None for t in trials):
         eye = np.eye(3)
         frame = np.concatenate(
@@ -183,8 +192,54 @@ def arm_angles_corpus(
     else:
         frame = None
     times = np.concatenate([t.times for t in trials])
-    angles = _angles_concatenated(centres, frame, times, offsets, singular_angle, names)
+    markers = np.concatenate([t.markers for t in trials])
+    per_arm = []
+    for a, side in enumerate(arms):
+        # Trial validated its markers (shape, finite); implied centres for all frames at
+        # once, then the recordings' own joint centres where they have them.
+        centres = implied_joint_centres(markers[:, 4 * a : 4 * a + 4])
+        for k, t in enumerate(trials):
+            if t.joints is not None:
+                centres[offsets[k] : offsets[k] + lengths[k]] = t.joints[:, 3 * a : 3 * a + 3]
+        per_arm.append(
+            _angles_concatenated(
+                centres, frame, times, offsets, singular_angle, names, mirror=side == "left"
+            )
+        )
+    angles = per_arm[0] if len(per_arm) == 1 else np.concatenate(per_arm, axis=1)
     return np.split(angles, offsets[1:])
+
+
+def angles_from_directions(
+    upper: ArrayLike,
+    fore: ArrayLike,
+    times: ArrayLike | None = None,
+    *,
+    singular_angle: float = DEFAULT_SINGULAR_ANGLE,
+) -> NDArray[np.float64]:
+    """The four angles of one arm from its bone directions in the body frame.
+
+    Parameters
+    ----------
+    upper, fore : (T, 3) arrays
+        Directions (any length > 0) of the upper arm (shoulder → elbow) and of the forearm
+        (elbow → wrist), body frame.
+    times : (T,) array, seconds, optional
+        Timestamps for the interpolation through singular frames (default: frame index).
+
+    Returns
+    -------
+    (T, 4) float64 array, radians (γ, β, α, elbow), continuous in time.
+    """
+    u = np.asarray(upper, dtype=np.float64)
+    f = np.asarray(fore, dtype=np.float64)
+    if u.ndim != 2 or u.shape[1] != 3 or f.shape != u.shape:
+        raise ValueError(f"upper and fore must both have shape (T, 3), got {u.shape}, {f.shape}")
+    centres = np.stack([np.zeros_like(u), u, u + f], axis=1)
+    t = None if times is None else np.asarray(times, dtype=np.float64)
+    return _angles_concatenated(
+        centres, None, t, np.array([0], dtype=np.int64), singular_angle, ["directions"]
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -234,8 +289,11 @@ def _angles_concatenated(
     offsets: NDArray[np.int64],
     singular_angle: float,
     names: list[str],
+    *,
+    mirror: bool = False,
 ) -> NDArray[np.float64]:
-    """Angles of concatenated trials (``offsets`` = first frame of each trial)."""
+    """Angles of concatenated trials (``offsets`` = first frame of each trial); ``mirror``
+    reflects the body frame's y axis first (a left arm seen as a right arm)."""
     if not (0.0 <= singular_angle < np.pi / 4):
         raise ValueError(f"singular_angle must be in [0, π/4) radians, got {singular_angle!r}")
     n = centres.shape[0]
@@ -244,6 +302,9 @@ def _angles_concatenated(
     if body_frame is not None:  # recording axes -> body axes: v_B = Fᵀ v
         upper = np.einsum("tji,tj->ti", body_frame, upper)
         fore = np.einsum("tji,tj->ti", body_frame, fore)
+    if mirror:
+        upper = upper * np.array([1.0, -1.0, 1.0])
+        fore = fore * np.array([1.0, -1.0, 1.0])
     diag = np.diag(BODY_TO_SHOULDER)  # body -> shoulder frame (a diagonal sign flip)
     u = _unit(upper * diag, "upper arm (shoulder→elbow)", names, offsets)
     f = _unit(fore * diag, "forearm (elbow→wrist)", names, offsets)

@@ -3,14 +3,21 @@
 ``fit(trials)`` runs the whole method of Fod, Matarić & Jenkins on a list of
 :class:`~visprim.trial.Trial`:
 
-1. inverse kinematics → 4 angles (radians, :mod:`visprim.ik`);
+1. inverse kinematics → 4 angles per arm (radians, :mod:`visprim.ik`);
 2. zero-phase Butterworth low-pass (:mod:`visprim.filtering`);
-3. segmentation, SEG-2 (default) or SEG-1 (:mod:`visprim.segment`);
-4. each segment resampled to ``n_samples`` per angle → a ``4 n``-D vector, γ and α shifted
-   by whole turns so that the segment's mean angle lies in (−π, π] (:mod:`visprim.vectors`;
-   reconstructions on a trial's clock add the shifts back);
-5. PCA (:mod:`visprim.pca`), keeping ``n_components`` eigenvectors ``E_f``;
-6. k-means with ``n_clusters`` clusters in the f-D projection space: the primitives.
+3. the angles in the chosen description (``features``, :mod:`visprim.features`): the
+   paper's Z-Y-Z angles, or the singularity-free bone directions (default);
+4. segmentation, SEG-2 (default) or SEG-1 (:mod:`visprim.segment`), on those channels;
+5. each segment resampled to ``n_samples`` per channel → a ``C n``-D vector (400-D for the
+   paper's one arm), γ and α shifted by whole turns so that the segment's mean angle lies
+   in (−π, π] (:mod:`visprim.vectors`; reconstructions on a trial's clock add them back);
+6. PCA (:mod:`visprim.pca`), keeping ``n_components`` eigenvectors ``E_f``;
+7. k-means with ``n_clusters`` clusters in the f-D projection space: the primitives.
+
+The paper's exact method is one named setting, :meth:`PrimitiveModel.paper`: Z-Y-Z angles
+and SEG-2's constant tuned from the repetitions. The defaults are made for real
+recordings: bone directions (no Z-Y-Z singularity with the arm hanging) and SEG-2's
+constant scaled to the corpus' movement speed (robust to static trials and slow movers).
 
 Everything numeric runs in the Rust kernels (:mod:`visprim.kernels`). Units: seconds and
 radians throughout the API; degrees only in reports (and the ``zvc_threshold_deg`` option).
@@ -29,10 +36,12 @@ from sklearn.exceptions import NotFittedError
 
 from visprim import kernels
 from visprim.errors import DEFAULT_F_VALUES, DEFAULT_K_VALUES, ErrorTables, compute_error_tables
+from visprim.features import FEATURES, n_channels, periodic_channels, to_angles
 from visprim.pca import PCABasis, fit_pca
-from visprim.preprocess import PreparedCorpus, prepare_corpus, seg2_partition
+from visprim.preprocess import PreparedCorpus, prepare_corpus
+from visprim.segment.seg2 import TUNINGS
 from visprim.trial import Trial
-from visprim.vectors import SegmentVectors, corpus_vectors, stretch, to_curves, vectors_from_frames
+from visprim.vectors import SegmentVectors, stretch, to_curves, vectors_from_frames
 
 Source = Literal["projection", "cluster"]
 
@@ -57,12 +66,23 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
     window : float
         SEG-1 window in seconds: ZVCs of different angles closer than this form one event
         (default 0.3).
+    seg1_adaptive : bool
+        SEG-1 cuts fast cyclic motion at its half-cycles with a shorter window where the
+        DOFs reverse faster than ``window`` (default True; :mod:`visprim.segment.seg1`).
     seg2_threshold : float or None
-        SEG-2 constant ``c`` on ``z(t) = Σ θ̇ᵢ²`` in (rad/s)²; ``None`` (default) tunes it on
-        the training corpus so that every trial yields at least as many segments as its
-        ``repetitions``.
+        SEG-2 constant ``c`` on ``z(t) = Σ θ̇ᵢ²`` (the channels' summed squared velocity) in
+        (rad/s)²; ``None`` (default) tunes it on the training corpus (``seg2_tuning``).
+    seg2_tuning : {"robust", "repetitions"}
+        How ``c`` is tuned: scaled to the corpus' movement speed, with lower thresholds for
+        slow trials (default; :func:`visprim.segment.seg2.robust_seg2_thresholds`), or the
+        paper's rule, every trial yields at least its ``repetitions`` segments.
+    features : {"directions", "zyz"}
+        What the segmentation and the vectors use (:mod:`visprim.features`): unit upper-arm
+        and forearm directions, 6 channels per arm (default), or the paper's Z-Y-Z Euler
+        angles and elbow, 4 channels per arm.
     n_samples : int
-        Samples per angle in a segment vector (default 100; vectors are ``4 n_samples``-D).
+        Samples per channel in a segment vector (default 100; vectors are ``C n_samples``-D,
+        C channels per frame: 4 or 6 per arm, see ``features``).
     n_components : int
         Eigenvectors kept, ``f`` (default 30).
     n_clusters : int
@@ -101,7 +121,10 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         segmentation: str = "seg2",
         zvc_threshold_deg: float = 5.0,
         window: float = 0.3,
+        seg1_adaptive: bool = True,
         seg2_threshold: float | None = None,
+        seg2_tuning: str = "robust",
+        features: str = "directions",
         n_samples: int = 100,
         n_components: int = 30,
         n_clusters: int = 30,
@@ -115,7 +138,10 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         self.segmentation = segmentation
         self.zvc_threshold_deg = zvc_threshold_deg
         self.window = window
+        self.seg1_adaptive = seg1_adaptive
         self.seg2_threshold = seg2_threshold
+        self.seg2_tuning = seg2_tuning
+        self.features = features
         self.n_samples = n_samples
         self.n_components = n_components
         self.n_clusters = n_clusters
@@ -147,11 +173,17 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
             np.isfinite(self.seg2_threshold) and self.seg2_threshold > 0
         ):
             raise bad("seg2_threshold", "must be None (tune it) or a positive number (rad/s)^2")
+        if not isinstance(self.seg1_adaptive, (bool, np.bool_)):
+            raise bad("seg1_adaptive", "must be True or False")
+        if self.seg2_tuning not in TUNINGS:
+            raise bad("seg2_tuning", f"must be one of {list(TUNINGS)}")
+        if self.features not in FEATURES:
+            raise bad("features", f"must be one of {list(FEATURES)}")
         if not is_int(self.n_samples) or self.n_samples < 2:
             raise bad("n_samples", "must be an integer >= 2")
-        d = 4 * int(self.n_samples)
+        d = n_channels(self.features) * int(self.n_samples)
         if not is_int(self.n_components) or not 1 <= self.n_components <= d:
-            raise bad("n_components", f"must be an integer in [1, 4 * n_samples = {d}]")
+            raise bad("n_components", f"must be an integer in [1, channels * n_samples = {d}]")
         if not is_int(self.n_clusters) or self.n_clusters < 1:
             raise bad("n_clusters", "must be an integer >= 1")
         if not is_int(self.n_init) or self.n_init < 1:
@@ -163,6 +195,15 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         if not is_int(self.seed) or self.seed < 0:
             raise bad("seed", "must be an integer >= 0")
 
+    @classmethod
+    def paper(cls, **params: Any) -> PrimitiveModel:
+        """The paper's method exactly: Z-Y-Z Euler angles and elbow (``features="zyz"``),
+        SEG-2's constant tuned from the repetitions (``seg2_tuning="repetitions"``), SEG-1's
+        fixed window (``seg1_adaptive=False``); other parameters as given (their defaults
+        are the paper's)."""
+        paper = {"features": "zyz", "seg2_tuning": "repetitions", "seg1_adaptive": False}
+        return cls(**{**paper, **params})
+
     def _check_fitted(self) -> None:
         if not hasattr(self, "cluster_centers_"):
             raise NotFittedError(
@@ -172,26 +213,44 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
 
     # ------------------------------------------------------------------ fitting
 
-    def prepare(self, trials: Sequence[Trial], *, tune_seg2: bool | None = None) -> PreparedCorpus:
+    def prepare(
+        self,
+        trials: Sequence[Trial],
+        *,
+        tune_seg2: bool | None = None,
+        segmentation: str | None = None,
+    ) -> PreparedCorpus:
         """IK, low-pass and segmentation of ``trials`` with this model's settings.
 
         Before ``fit`` (or with ``tune_seg2=True``) SEG-2's constant is tuned on these
         trials (unless ``seg2_threshold`` is given); after ``fit`` the fitted constant
         ``seg2_threshold_`` is reused so that new trials are cut like the training ones.
+        ``segmentation`` overrides the model's method (e.g. SEG-2 partitions of a SEG-1
+        model's trials for whole-movement reconstructions).
         """
         if tune_seg2 is None:
             tune_seg2 = not hasattr(self, "seg2_threshold_")
         threshold = self.seg2_threshold
         if not tune_seg2 and getattr(self, "seg2_threshold_", None) is not None:
             threshold = self.seg2_threshold_
+        if hasattr(self, "arms_"):
+            arms = {t.arms for t in trials}
+            if arms != {tuple(self.arms_)}:
+                raise ValueError(
+                    f"the model was fitted on arms {list(self.arms_)}, the trials have "
+                    f"{sorted(list(a) for a in arms)}; read them with the same arm= option"
+                )
         return prepare_corpus(
             trials,
             filter_order=int(self.filter_order),
             cutoff=float(self.cutoff),
-            segmentation=str(self.segmentation),
+            segmentation=str(segmentation or self.segmentation),
             zvc_threshold_deg=float(self.zvc_threshold_deg),
             window=float(self.window),
             seg2_threshold=threshold,
+            seg2_tuning=str(self.seg2_tuning),
+            features=str(self.features),
+            seg1_adaptive=bool(self.seg1_adaptive),
         )
 
     def vectorize(self, corpus: PreparedCorpus) -> SegmentVectors:
@@ -207,13 +266,14 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
             )
         starts, ends = seg.global_frames()
         return vectors_from_frames(
-            corpus.angles_all,
+            corpus.values,
             starts,
             ends,
             trial=seg.trial,
             starts=seg.start,
             ends=seg.end,
             n_samples=int(self.n_samples),
+            periodic_channels=periodic_channels(corpus.features, len(corpus.arms)),
         )
 
     def fit(
@@ -269,6 +329,7 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
                 "lower n_clusters or give more trials"
             )
         basis = fit_pca(sv.vectors)
+        counts = corpus.segmentation.counts() if corpus is not None else np.zeros(0)
         return self._set_fitted(
             basis,
             basis.project(sv.vectors, int(self.n_components)),
@@ -277,6 +338,9 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
             ends=sv.ends,
             seg2_threshold=corpus.seg2_threshold if corpus is not None else None,
             trial_names=list(corpus.names) if corpus is not None else [],
+            arms=tuple(corpus.arms) if corpus is not None else ("right",),
+            n_without_segments=int(np.sum(counts == 0)),
+            n_short=int(corpus.n_short) if corpus is not None else 0,
             vectors=sv.vectors,
             source=source,
         )
@@ -291,6 +355,9 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         ends: NDArray[np.float64],
         seg2_threshold: float | None,
         trial_names: list[str],
+        arms: tuple[str, ...],
+        n_without_segments: int,
+        n_short: int,
         vectors: NDArray[np.float64] | None,
         source: dict[str, Any] | None,
         clusters: tuple[NDArray[np.float64], NDArray[np.int64], float, int] | None = None,
@@ -326,6 +393,9 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         )
         self.seg2_threshold_ = seg2_threshold
         self.trial_names_ = trial_names
+        self.arms_ = tuple(arms)
+        self.n_trials_without_segments_ = int(n_without_segments)
+        self.n_short_trials_ = int(n_short)
         self.training_vectors_: NDArray[np.float64] | None = vectors
         self.training_projections_: NDArray[np.float64] | None = projections
         self.error_tables_: ErrorTables | None = None
@@ -355,9 +425,23 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         return int(self.cluster_centers_.shape[0])
 
     @property
+    def n_channels(self) -> int:
+        """Channels per frame: 4 (``"zyz"``) or 6 (``"directions"``) per arm."""
+        return n_channels(str(self.features), len(getattr(self, "arms_", ("right",))))
+
+    @property
     def dim(self) -> int:
-        """Dimension of a segment vector, ``4 n_samples``."""
-        return 4 * int(self.n_samples)
+        """Dimension of a segment vector, ``n_channels · n_samples`` (400 for the paper)."""
+        return self.n_channels * int(self.n_samples)
+
+    def _to_angles(self, curves: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Angle curves ``(..., n, 4 n_arms)`` of channel curves ``(..., n, C)``, each curve
+        converted on its own (:func:`visprim.features.to_angles`)."""
+        if self.features == "zyz":
+            return curves
+        flat = curves.reshape(-1, curves.shape[-2], curves.shape[-1])
+        out = np.stack([to_angles(c, str(self.features)) for c in flat])
+        return out.reshape(*curves.shape[:-1], out.shape[-1])
 
     # ------------------------------------------------------------------ transform / predict
 
@@ -416,7 +500,7 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
     def reconstruct(
         self, X: ArrayLike | Sequence[Trial] | Trial, *, source: Source = "projection"
     ) -> NDArray[np.float64]:
-        """Reconstructed segments as angle curves, shape (N, n_samples, 4), radians.
+        """Reconstructed segments as angle curves, shape (N, n_samples, 4 n_arms), radians.
 
         ``source="projection"``: ``s = E_f p + s̄`` with ``p`` the segment's projection;
         ``source="cluster"``: ``s = E_f c + s̄`` with ``c`` the centre of its primitive.
@@ -428,7 +512,8 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         self._check_fitted()
         x, sv = self._segment_vectors_of(X)
         rec = self._reconstruct_vectors(self.basis_.project(x, int(self.n_components)), source)
-        return to_curves(rec) if sv is None else sv.to_trial_angles(rec)
+        curves = to_curves(rec, self.n_channels) if sv is None else sv.to_trial_angles(rec)
+        return self._to_angles(curves)
 
     def _reconstruct_vectors(self, p: NDArray[np.float64], source: Source) -> NDArray[np.float64]:
         if source == "projection":
@@ -440,12 +525,13 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         return q @ self.components_.T + self.mean_
 
     def primitive_angles(self, k: int) -> NDArray[np.float64]:
-        """Primitive ``k`` (its cluster centre) as 4 angle curves, (n_samples, 4) radians."""
+        """Primitive ``k`` (its cluster centre) as angle curves, (n_samples, 4 n_arms)
+        radians."""
         self._check_fitted()
         if not 0 <= int(k) < self.n_primitives:
             raise IndexError(f"primitive index {k} out of range [0, {self.n_primitives})")
         s = self.cluster_centers_[int(k)] @ self.components_.T + self.mean_
-        return to_curves(s)
+        return self._to_angles(to_curves(s, self.n_channels))
 
     def reconstruct_movement(
         self,
@@ -466,33 +552,33 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         Returns
         -------
         times : (m,) seconds — the trial's frame times covered by the segments.
-        angles : (m, 4) radians — the reconstruction.
-        original : (m, 4) radians — the low-passed IK angles at the same frames (only with
-            ``return_original=True``).
+        angles : (m, 4 n_arms) radians — the reconstruction.
+        original : (m, 4 n_arms) radians — the low-passed IK angles at the same frames (only
+            with ``return_original=True``).
         """
         self._check_fitted()
-        times, angles, segments = seg2_partition(
-            trial,
-            filter_order=int(self.filter_order),
-            cutoff=float(self.cutoff),
-            threshold=getattr(self, "seg2_threshold_", None) or self.seg2_threshold,
-        )
-        sv = corpus_vectors([times], [angles], [segments], n_samples=int(self.n_samples))
-        curves = sv.to_trial_angles(self._reconstruct_vectors(self.transform(sv.vectors), source))
-        out_t, out_a, out_o = [], [], []
-        for j, (start, end) in enumerate(segments):
-            last = j == len(segments) - 1
-            mask = (times >= start) & ((times <= end) if last else (times < end))
-            if not np.any(mask):
-                continue
-            out_t.append(times[mask])
-            out_a.append(stretch(curves[j], start, end, times[mask]))
-            out_o.append(angles[mask])
-        if not out_t:
+        corpus = self.prepare([trial], segmentation="seg2")
+        if corpus.segmentation.n_segments == 0:
             raise ValueError(f"trial {trial.name!r}: SEG-2 found no segment to reconstruct")
-        result = (np.concatenate(out_t), np.concatenate(out_a))
+        segments = corpus.segments[0]
+        times = corpus.times_all
+        sv = self.vectorize(corpus)
+        curves = sv.to_trial_angles(self._reconstruct_vectors(self.transform(sv.vectors), source))
+        mask = (times >= segments[0, 0]) & (times <= segments[-1, 1])
+        out_t = times[mask]
+        # Segment j covers [start_j, end_j); the last one also its end.
+        which = np.clip(np.searchsorted(segments[:, 1], out_t, side="right"), 0, len(segments) - 1)
+        values = np.empty((out_t.size, curves.shape[2]))
+        for j, (start, end) in enumerate(segments):
+            rows = which == j
+            values[rows] = stretch(curves[j], start, end, out_t[rows])
+        angles = values if self.features == "zyz" else to_angles(values, str(self.features), out_t)
+        original = corpus.angles_all[mask]
+        if self.features != "zyz":
+            angles = _nearest_turns(angles, original, len(corpus.arms))
+        result = (out_t, angles)
         if return_original:
-            return (*result, np.concatenate(out_o))
+            return (*result, original)
         return result
 
     def reconstruct_segment(
@@ -504,17 +590,35 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
         *,
         source: Source = "projection",
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """One segment [start, end] s of a (low-passed) angle trajectory, reconstructed,
-        with its whole-turn offsets of γ and α added back (on the trajectory's own angles),
-        and stretched back to its duration: ``(frame times (m,) s, angles (m, 4) rad)``."""
+        """One segment [start, end] s of a (low-passed) angle trajectory ``(T, 4 n_arms)``
+        radians, reconstructed (whole-turn offsets of γ and α added back, so it lies on the
+        trajectory's own angles) and stretched back to its duration:
+        ``(frame times (m,) s, angles (m, 4 n_arms) rad)``."""
+        from visprim.features import from_angles
+
         self._check_fitted()
         t = np.asarray(times, dtype=np.float64)
-        sv = corpus_vectors(
-            [t], [angles], [np.array([[start, end]])], n_samples=int(self.n_samples)
+        a = np.asarray(angles, dtype=np.float64)
+        values = from_angles(a, str(self.features))
+        i0, i1 = np.interp([start, end], t, np.arange(t.size))
+        sv = vectors_from_frames(
+            values,
+            [i0],
+            [i1],
+            trial=[0],
+            starts=[start],
+            ends=[end],
+            n_samples=int(self.n_samples),
+            periodic_channels=periodic_channels(str(self.features), a.shape[1] // 4),
         )
         curve = sv.to_trial_angles(self._reconstruct_vectors(self.transform(sv.vectors), source))[0]
         mask = (t >= start) & (t <= end)
-        return t[mask], stretch(curve, start, end, t[mask])
+        out = stretch(curve, start, end, t[mask])
+        if self.features != "zyz":
+            out = _nearest_turns(
+                to_angles(out, str(self.features), t[mask]), a[mask], a.shape[1] // 4
+            )
+        return t[mask], out
 
     # ------------------------------------------------------------------ errors
 
@@ -586,6 +690,19 @@ def _as_trials(trials: Sequence[Trial] | Trial) -> list[Trial]:
     for i, t in enumerate(out):
         if not isinstance(t, Trial):
             raise TypeError(f"item {i} is a {type(t).__name__}, expected visprim.Trial")
+    return out
+
+
+def _nearest_turns(
+    angles: NDArray[np.float64], reference: NDArray[np.float64], n_arms: int
+) -> NDArray[np.float64]:
+    """``angles`` with γ and α of each arm shifted by the whole turns that bring their mean
+    closest to ``reference``'s (angles rebuilt from directions start on the principal
+    branch; the trial's own angles are unwrapped from wherever the trial started)."""
+    out = angles.copy()
+    for c in periodic_channels("zyz", n_arms):
+        turns = np.round(np.mean(reference[:, c] - out[:, c]) / (2 * np.pi))
+        out[:, c] += 2 * np.pi * turns
     return out
 
 

@@ -103,6 +103,7 @@ def save_model(
             if model.seg2_threshold_ is None
             else float(model.seg2_threshold_),
             "n_training_segments": int(model.n_training_segments_),
+            "arms": list(getattr(model, "arms_", ("right",))),
             "trial_names": [str(n) for n in model.trial_names_],
             "training_source": _jsonable(model.training_source_),
         },
@@ -213,6 +214,7 @@ def load_model(path: str | PathLike[str]) -> PrimitiveModel:
         Another format or format version, or a damaged file.
     """
     from visprim.errors import ErrorTables
+    from visprim.features import n_channels
     from visprim.model import PrimitiveModel
 
     path = Path(path)
@@ -240,16 +242,24 @@ def load_model(path: str | PathLike[str]) -> PrimitiveModel:
             if _digest(a) != spec.get("sha256"):
                 raise ModelFileError(f"{path}: damaged model file: checksum mismatch in {name!r}")
             arrays[name] = a
+    # Files from before the bone-direction features were learned with the paper's method.
+    params.setdefault("features", "zyz")
+    params.setdefault("seg2_tuning", "repetitions")
+    params.setdefault("seg1_adaptive", False)
+    arms = fitted.get("arms", ["right"])
+    if not isinstance(arms, list) or not arms or any(a not in ("right", "left") for a in arms):
+        raise ModelFileError(f"{path}: damaged model file: arms {arms!r} are not arm names")
     try:
         model = PrimitiveModel(**params)
-    except TypeError as exc:
+        channels = n_channels(str(params["features"]), len(arms))
+    except (TypeError, ValueError) as exc:
         raise ModelFileError(f"{path}: model parameters not understood: {exc}") from None
     d, k, n = arrays["mean"].shape[0], arrays["cluster_centers"].shape[0], arrays["labels"].shape[0]
     f = arrays["cluster_centers"].shape[1] if arrays["cluster_centers"].ndim == 2 else -1
     consistent = (
         arrays["eigenvalues"].shape == (d,)
         and arrays["eigenvectors"].shape == (d, d)
-        and d == 4 * int(params.get("n_samples", -1))
+        and d == channels * int(params.get("n_samples", -1))
         and f == int(params.get("n_components", -2))
         and arrays["primitive_durations"].shape == (k,)
         and all(
@@ -274,6 +284,7 @@ def load_model(path: str | PathLike[str]) -> PrimitiveModel:
     thr = fitted.get("seg2_threshold")
     model.seg2_threshold_ = None if thr is None else float(thr)
     model.n_training_segments_ = int(fitted.get("n_training_segments") or n)
+    model.arms_ = tuple(arms)
     model.trial_names_ = list(fitted.get("trial_names", []))
     model.training_source_ = dict(fitted.get("training_source") or {})
     tables = header.get("error_tables")

@@ -8,16 +8,20 @@ filter, one for the zero-velocity crossings, one for the resampling).
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
-from visprim.filtering import lowpass_concatenated
+from visprim.features import from_angles
+from visprim.filtering import butterworth, default_padlen, lowpass_concatenated
 from visprim.ik import arm_angles_corpus
 from visprim.segment import CorpusSegmentation, seg2, segment_concatenated
 from visprim.trial import Trial
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -28,10 +32,15 @@ class PreparedCorpus:
     ----------
     names : list of str — trial names.
     times_all : (F,) seconds — all trials' timestamps, concatenated.
-    raw_angles_all : (F, 4) radians — IK angles before the low-pass.
-    angles_all : (F, 4) radians — low-passed angles.
+    raw_angles_all : (F, 4 n_arms) radians — IK angles before the low-pass.
+    angles_all : (F, 4 n_arms) radians — low-passed angles.
     offsets : (n_trials,) int — first frame of each trial in the concatenation.
     segmentation : CorpusSegmentation — segments (trial, start/end seconds and frames).
+    features : str — what the segmentation and the vectors use (:mod:`visprim.features`).
+    values_all : (F, C) — the low-passed angles in that description (``angles_all`` itself
+        for ``"zyz"``; unit bone directions for ``"directions"``).
+    arms : tuple of str — the arms of every trial.
+    n_short : int — trials shorter than the filter's padding (filtered with less padding).
     """
 
     names: list[str]
@@ -40,6 +49,15 @@ class PreparedCorpus:
     angles_all: NDArray[np.float64]
     offsets: NDArray[np.int64]
     segmentation: CorpusSegmentation
+    features: str = "zyz"
+    values_all: NDArray[np.float64] | None = None
+    arms: tuple[str, ...] = ("right",)
+    n_short: int = 0
+
+    @property
+    def values(self) -> NDArray[np.float64]:
+        """(F, C) per-frame channels the segments are cut from and resampled."""
+        return self.angles_all if self.values_all is None else self.values_all
 
     def _split(self, a: NDArray[np.float64]) -> list[NDArray[np.float64]]:
         return np.split(a, self.offsets[1:])
@@ -83,11 +101,16 @@ def prepare_corpus(
     zvc_threshold_deg: float = 5.0,
     window: float = 0.3,
     seg2_threshold: float | None = None,
+    seg2_tuning: str = "repetitions",
+    features: str = "zyz",
+    seg1_adaptive: bool = False,
 ) -> PreparedCorpus:
     """IK, zero-phase low-pass and segmentation of ``trials`` (see the module docstring).
 
-    ``seg2_threshold=None`` tunes SEG-2's constant on this corpus from each trial's
-    ``repetitions``; the other parameters are those of :class:`~visprim.model.PrimitiveModel`.
+    ``seg2_threshold=None`` tunes SEG-2's constant on this corpus (``seg2_tuning``, see
+    :func:`visprim.segment.tune_seg2_threshold`); the other parameters are those of
+    :class:`~visprim.model.PrimitiveModel`. Trials shorter than the filter's padding are
+    filtered with less padding (as scipy's ``padlen`` allows), said once in the log.
     """
     trials = list(trials)
     if not trials:
@@ -97,18 +120,43 @@ def prepare_corpus(
     times = np.concatenate([t.times for t in trials])
     lengths = np.array([t.n_frames for t in trials], dtype=np.int64)
     offsets = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
-    filtered = lowpass_concatenated(raw, offsets, order=filter_order, cutoff=cutoff, names=names)
+    pad = default_padlen(butterworth(filter_order, cutoff))
+    n_short = int(np.sum(lengths <= pad))
+    if n_short:
+        log.info(
+            "%d trial(s) have no more frames than the filter padding (%d frames); "
+            "filtered with padding reduced to their length - 1",
+            n_short,
+            pad,
+        )
+    filtered = lowpass_concatenated(
+        raw, offsets, order=filter_order, cutoff=cutoff, names=names, short="reduce"
+    )
+    values = from_angles(filtered, features)
     seg = segment_concatenated(
         times,
-        filtered,
+        values,
         offsets,
         segmentation,  # type: ignore[arg-type]
         repetitions=np.array([t.repetitions for t in trials], dtype=np.int64),
         threshold=seg2_threshold,
+        tuning=seg2_tuning,
+        seg1_adaptive=seg1_adaptive,
         window=window,
         min_change_deg=zvc_threshold_deg,
     )
-    return PreparedCorpus(names, times, raw, filtered, offsets, seg)
+    return PreparedCorpus(
+        names,
+        times,
+        raw,
+        filtered,
+        offsets,
+        seg,
+        features=features,
+        values_all=None if features == "zyz" else values,
+        arms=trials[0].arms,
+        n_short=n_short,
+    )
 
 
 def seg2_partition(

@@ -100,13 +100,17 @@ class TrialList(LazyCorpus):
 class Block:
     """The segments of a chunk of items: vectors (n, d) radians and where they came from
     (``trial`` indices local to the chunk, ``starts``/``ends`` seconds), the chunk's trial
-    names and its number of trials."""
+    names, its arms (None without trials), how many of its trials have no segment and how
+    many are shorter than the filter's padding."""
 
     vectors: NDArray[np.float64]
     trial: NDArray[np.int64]
     starts: NDArray[np.float64]
     ends: NDArray[np.float64]
     names: list[str]
+    arms: tuple[str, ...] | None = None
+    n_without: int = 0
+    n_short: int = 0
 
     @property
     def n_trials(self) -> int:
@@ -149,26 +153,26 @@ def chunk_block(settings: Any, corpus: LazyCorpus, items: Sequence[int], first: 
 
     ``settings`` is a model from :func:`_settings`; ``first`` numbers unnamed trials.
     """
-    d = settings.dim
     trials = corpus.read(items)
-    empty = Block(
-        np.zeros((0, d)),
-        np.zeros(0, dtype=np.int64),
-        np.zeros(0),
-        np.zeros(0),
-        trial_names(trials, first),
-    )
+    names = trial_names(trials, first)
     if not trials:
-        return empty
+        return Block(np.zeros((0, 0)), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), [])
     prepared = settings.prepare(trials, tune_seg2=False)
+    counts = prepared.segmentation.counts()
+    about = dict(
+        arms=tuple(prepared.arms),
+        n_without=int(np.sum(counts == 0)),
+        n_short=int(prepared.n_short),
+    )
     if prepared.segmentation.n_segments == 0:
-        return empty
+        empty = np.zeros(0)
+        return Block(np.zeros((0, 0)), np.zeros(0, dtype=np.int64), empty, empty, names, **about)
     sv = settings.vectorize(prepared)
-    return Block(sv.vectors, sv.trial, sv.starts, sv.ends, empty.names)
+    return Block(sv.vectors, sv.trial, sv.starts, sv.ends, names, **about)
 
 
 def _accumulate(block: Block, n_threads: int | None = None) -> Any:
-    acc = kernels.CovarianceAccumulator(block.vectors.shape[1])
+    acc = kernels.CovarianceAccumulator()
     if len(block):
         acc.update(block.vectors, n_threads=n_threads)
     return acc
@@ -202,16 +206,23 @@ class _Segments:
     starts: list[NDArray[np.float64]]
     ends: list[NDArray[np.float64]]
     names: list[str]
+    arms: set[tuple[str, ...]]
+    n_without: int = 0
+    n_short: int = 0
 
     @classmethod
     def empty(cls) -> _Segments:
-        return cls([], [], [], [])
+        return cls([], [], [], [], set())
 
     def add(self, block: Block) -> None:
         self.trial.append(block.trial + len(self.names))
         self.starts.append(block.starts)
         self.ends.append(block.ends)
         self.names.extend(block.names)
+        if block.arms is not None:
+            self.arms.add(block.arms)
+        self.n_without += block.n_without
+        self.n_short += block.n_short
 
     def arrays(self) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
         def cat(parts: list[NDArray[Any]], dtype: Any) -> NDArray[Any]:
@@ -230,6 +241,11 @@ def _finish(
     clusters: tuple[NDArray[np.float64], NDArray[np.int64], float, int] | None = None,
 ) -> Any:
     trial, starts, ends = segs.arrays()
+    if len(segs.arms) > 1:
+        raise ValueError(
+            f"fit: the corpus mixes trials of arms {sorted(list(a) for a in segs.arms)}; "
+            "read them with the same arm= option"
+        )
     return model._set_fitted(
         basis,
         projections,
@@ -238,6 +254,9 @@ def _finish(
         ends=ends,
         seg2_threshold=threshold,
         trial_names=segs.names,
+        arms=segs.arms.pop() if segs.arms else ("right",),
+        n_without_segments=segs.n_without,
+        n_short=segs.n_short,
         vectors=None,
         source=source,
         clusters=clusters,
@@ -268,7 +287,7 @@ def fit_streaming(
     threshold = tune_threshold(model, corpus)
     settings = _settings(model, threshold)
     segs = _Segments.empty()
-    acc = kernels.CovarianceAccumulator(settings.dim)
+    acc = kernels.CovarianceAccumulator()
     tmp = Path(tempfile.mkdtemp(prefix="visprim-fit-", dir=spill_dir))
     bar = tqdm(total=len(corpus), desc="learn", unit="item", disable=_disable(), leave=False)
     try:
@@ -359,11 +378,22 @@ def _merge_task(a: Any, b: Any) -> Any:
     return a
 
 
-def _meta_task(block: Block) -> tuple[NDArray[np.int64], NDArray[np.float64], Any, list[str]]:
-    return block.trial, block.starts, block.ends, block.names
+def _meta_task(block: Block) -> Block:
+    return Block(
+        np.zeros((0, 0)),
+        block.trial,
+        block.starts,
+        block.ends,
+        block.names,
+        block.arms,
+        block.n_without,
+        block.n_short,
+    )
 
 
 def _project_task(block: Block, mean_e: NDArray[np.float64], e: NDArray[np.float64]) -> Any:
+    if len(block) == 0:
+        return np.zeros((0, e.shape[1]))
     return block.vectors @ e - mean_e
 
 
@@ -481,9 +511,9 @@ def _fit_dask(
     del blocks
     segs = _Segments.empty()
     rows = [0]
-    for trial, starts, ends, names in metas:
-        segs.add(Block(np.zeros((0, 0)), trial, starts, ends, names))
-        rows.append(rows[-1] + trial.size)
+    for meta in metas:
+        segs.add(meta)
+        rows.append(rows[-1] + meta.trial.size)
     centers, labels, inertia, n_iter = _kmeans_dask(
         client, model, projs, rows, basis.eigenvalues[:f], sample_size
     )

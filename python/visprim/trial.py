@@ -80,6 +80,12 @@ class Trial:
         Path of the file it was read from.
     meta : dict
         Anything else a reader knows (frame rate, units in the file, style label, ...).
+    arms : tuple of str
+        Which arm each block of markers belongs to, ``("right",)`` by default. A two-arm
+        trial (``("right", "left")``, from ``visprim.io.read(..., arm="both")``) has
+        ``markers`` (T, 8, 3) and ``joints`` (T, 6, 3), arm by arm, in the recording frame;
+        inverse kinematics mirrors a ``"left"`` arm so its angles follow the right arm's
+        convention.
     """
 
     times: NDArray[np.float64]
@@ -93,6 +99,7 @@ class Trial:
     truth: Truth | None = None
     source: str | None = None
     meta: dict[str, Any] = field(default_factory=dict)
+    arms: tuple[str, ...] = ("right",)
 
     def __post_init__(self) -> None:
         self.times = np.ascontiguousarray(self.times, dtype=np.float64)
@@ -103,9 +110,13 @@ class Trial:
         n = self.times.shape[0]
         if n < 2:
             raise TrialError(f"{where}: a trial needs at least 2 frames, got {n}")
-        if self.markers.shape != (n, 4, 3):
+        self.arms = tuple(str(a) for a in self.arms)
+        if not self.arms or any(a not in ("right", "left") for a in self.arms):
+            raise TrialError(f"{where}: arms must be 'right'/'left' names, got {self.arms!r}")
+        m = 4 * len(self.arms)
+        if self.markers.shape != (n, m, 3):
             raise TrialError(
-                f"{where}: markers must have shape (T, 4, 3) = ({n}, 4, 3), "
+                f"{where}: markers must have shape (T, {m}, 3) = ({n}, {m}, 3), "
                 f"got {self.markers.shape}"
             )
         if not np.all(np.isfinite(self.times)):
@@ -123,7 +134,7 @@ class Trial:
                 f"{where}: markers contain NaN or infinity in {bad.size} frame(s), first at "
                 f"frame {bad[0]} ({self.times[bad[0]]:.6g} s); fill or split gaps first"
             )
-        for attr, shape in (("joints", (n, 3, 3)), ("body_frame", (n, 3, 3))):
+        for attr, shape in (("joints", (n, 3 * len(self.arms), 3)), ("body_frame", (n, 3, 3))):
             value = getattr(self, attr)
             if value is None:
                 continue
@@ -136,6 +147,11 @@ class Trial:
         if int(self.repetitions) < 1:
             raise TrialError(f"{where}: repetitions must be >= 1, got {self.repetitions}")
         self.repetitions = int(self.repetitions)
+
+    @property
+    def n_arms(self) -> int:
+        """Number of arms recorded (1 or 2)."""
+        return len(self.arms)
 
     @property
     def n_frames(self) -> int:

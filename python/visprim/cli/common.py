@@ -124,6 +124,25 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
     )
     g.add_argument("--window", type=float, default=0.3, help="SEG-1 window, s (default 0.3)")
     g.add_argument(
+        "--features",
+        choices=("directions", "zyz"),
+        default=None,
+        help="what segments are made of: bone directions (default) or the paper's Z-Y-Z angles",
+    )
+    g.add_argument(
+        "--seg2-tuning",
+        choices=("robust", "repetitions"),
+        default=None,
+        help="how SEG-2's c is tuned: to the corpus' speed (default) or the paper's rule "
+        "from the repetitions",
+    )
+    g.add_argument(
+        "--paper",
+        action="store_true",
+        help="the paper's exact method (Z-Y-Z angles, c from repetitions, fixed SEG-1 "
+        "window) unless --features / --seg2-tuning say otherwise",
+    )
+    g.add_argument(
         "--seg2-threshold",
         type=float,
         default=None,
@@ -139,7 +158,11 @@ def add_model_options(p: argparse.ArgumentParser) -> None:
 def model_from_args(args: argparse.Namespace, **overrides: Any) -> Any:
     from visprim.model import PrimitiveModel
 
+    paper = bool(getattr(args, "paper", False))
     params = dict(
+        features=getattr(args, "features", None) or ("zyz" if paper else "directions"),
+        seg2_tuning=getattr(args, "seg2_tuning", None) or ("repetitions" if paper else "robust"),
+        seg1_adaptive=not paper,
         segmentation=args.segmentation,
         filter_order=args.filter_order,
         cutoff=args.cutoff,
@@ -167,8 +190,12 @@ def summary(model: Any, n_trials: int) -> str:
     """One line on a fitted model: segments, SEG-2 c, f and k."""
     thr = model.seg2_threshold_
     c = f", SEG-2 c = {thr:.4g} (rad/s)^2" if thr is not None else ""
+    empty = getattr(model, "n_trials_without_segments_", 0)
+    short = getattr(model, "n_short_trials_", 0)
+    notes = f"; {empty} trial(s) without a segment" if empty else ""
+    notes += f"; {short} trial(s) shorter than the filter padding (padded less)" if short else ""
     return (
         f"{n_trials} trials -> {model.n_training_segments_} {label(model.segmentation)} "
         f"segments{c}; PCA f = {model.n_components} of {model.dim}; "
-        f"k-means k = {model.n_primitives} (inertia {model.inertia_:.4g} rad^2)"
+        f"k-means k = {model.n_primitives} (inertia {model.inertia_:.4g} rad^2){notes}"
     )

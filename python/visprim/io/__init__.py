@@ -37,6 +37,8 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from visprim.io.assemble import ArmRecording, align_heading, check_up_axis
 from visprim.io.corpus import Corpus
 from visprim.io.errors import (
@@ -153,7 +155,8 @@ def read_pieces(
     Parameters
     ----------
     path : path of a .bvh, .amc, .c3d or .csv file
-    arm : 'right' (default) or 'left'
+    arm : 'right' (default), 'left' or 'both' (a two-arm trial, see
+        :attr:`visprim.trial.Trial.arms`)
     skeleton : AMC only: the .asf (default: same stem, else the only .asf in the folder,
         else the .asf whose stem starts the AMC's stem)
     rate : AMC only: frames per second (default 120, CMU; AMC does not store it)
@@ -208,23 +211,38 @@ def read_pieces(
     if fmt == "csv":
         trials = [_read_csv(p, arm, repetitions)]
     else:
-        recs = _read_arm(
-            p,
-            fmt,
-            arm,
-            skeleton=skeleton,
-            rate=rate,
-            mapping=mapping,
-            preset=preset,
-            up_axis=up_axis,
-            units=units,
-            markers=markers,
-            max_gap=max_gap,
-            on_gap=on_gap,
-            gap_method=gap_method,
-            min_duration=min_duration,
-        )
-        heading = align_heading(recs)
+        if arm == "both" and mirror:
+            raise ValueError(
+                "mirror= does not apply to arm='both' (the left arm is mirrored by IK)"
+            )
+        sides = ("right", "left") if arm == "both" else (arm,)
+        per_side = [
+            _read_arm(
+                p,
+                fmt,
+                side,
+                skeleton=skeleton,
+                rate=rate,
+                mapping=mapping,
+                preset=preset,
+                up_axis=up_axis,
+                units=units,
+                markers=markers,
+                max_gap=max_gap,
+                on_gap=on_gap,
+                gap_method=gap_method,
+                min_duration=min_duration,
+            )
+            for side in sides
+        ]
+        recs = per_side[0]
+        heading = align_heading([r for side in per_side for r in side])
+        if len(per_side) > 1 and [r.times.shape for r in per_side[1]] != [
+            r.times.shape for r in recs
+        ]:
+            raise MalformedFileError(
+                p, "the right and left arms have different gaps; read each arm on its own"
+            )
         if mirror:
             for r in recs:
                 r.mirror()
@@ -239,11 +257,12 @@ def read_pieces(
                 "heading_deg": heading,
                 "piece": [i + 1, len(recs)],
             }
+            arm_recs = [side[i] for side in per_side]
             trials.append(
                 Trial(
                     times=rec.times,
-                    markers=rec.markers(markers),
-                    joints=rec.joints,
+                    markers=np.concatenate([r.markers(markers) for r in arm_recs], axis=1),
+                    joints=np.concatenate([r.joints for r in arm_recs], axis=1),
                     body_frame=rec.body_frame,
                     name=p.stem if len(recs) == 1 else f"{p.stem}_part{i + 1}",
                     subject=rec.meta.get("subject"),
@@ -251,6 +270,7 @@ def read_pieces(
                     repetitions=1 if repetitions is None else int(repetitions),
                     source=str(p),
                     meta=meta,
+                    arms=("right", "left") if arm == "both" else ("right",),
                 )
             )
     if resample is not None:

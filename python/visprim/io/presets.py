@@ -246,10 +246,10 @@ def fill_side(template: str, arm: str) -> str:
 
 
 def check_arm(arm: str) -> str:
-    """Validate the ``arm`` argument ('right' or 'left', case-insensitive)."""
+    """Validate the ``arm`` argument ('right', 'left' or 'both', case-insensitive)."""
     value = str(arm).lower()
-    if value not in SIDE_TOKENS:
-        raise ValueError(f"arm must be 'right' or 'left', got {arm!r}")
+    if value not in SIDE_TOKENS and value != "both":
+        raise ValueError(f"arm must be 'right', 'left' or 'both', got {arm!r}")
     return value
 
 

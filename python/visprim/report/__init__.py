@@ -25,12 +25,10 @@ import numpy as np
 
 from visprim.classify import score_against_truth
 from visprim.model import PrimitiveModel
-from visprim.preprocess import prepare_corpus
 from visprim.report import figures
 from visprim.report.html import Page, figure, paragraph, pre, table
-from visprim.segment import corpus_boundary_scores, seg2_trace, truth_pause_halfwidths, zvc
+from visprim.segment import corpus_boundary_scores, truth_pause_halfwidths, zvc
 from visprim.trial import Trial
-from visprim.vectors import corpus_vectors, stretch
 
 __all__ = ["Report", "segmentation_scores", "write_report"]
 
@@ -57,15 +55,7 @@ def segmentation_scores(
         raise ValueError("segmentation_scores needs trials with truth (generated data)")
     halves = [truth_pause_halfwidths(t) for t in trials]
     for method in ("seg1", "seg2"):
-        corpus = prepare_corpus(
-            trials,
-            filter_order=int(model.filter_order),
-            cutoff=float(model.cutoff),
-            segmentation=method,
-            zvc_threshold_deg=float(model.zvc_threshold_deg),
-            window=float(model.window),
-            seg2_threshold=None,
-        )
+        corpus = model.prepare(trials, tune_seg2=True, segmentation=method)
         s = corpus_boundary_scores(corpus.segments, truth, tolerance)
         out[method] = (float(s.precision), float(s.recall), float(s.f1))
         # A boundary the generator puts in the middle of a pause is matched anywhere in
@@ -243,14 +233,7 @@ def _trial_figures(
     counts = corpus.segmentation.counts() if corpus.segmentation.method == "seg2" else None
     if counts is None:
         # Count SEG-2 segments for the choice of the example trial.
-        seg2c = prepare_corpus(
-            trials,
-            filter_order=int(model.filter_order),
-            cutoff=float(model.cutoff),
-            segmentation="seg2",
-            seg2_threshold=model.seg2_threshold_ or model.seg2_threshold,
-        )
-        counts = seg2c.segmentation.counts()
+        counts = model.prepare(trials, segmentation="seg2").segmentation.counts()
     i = _pick_trial(corpus.names, counts, trial_name)
     trial = trials[i]
     times = corpus.times[i]
@@ -260,14 +243,7 @@ def _trial_figures(
     files = []
 
     # Fig. 5: ZVCs + SEG-1 (with the model's ZVC settings).
-    seg1_corpus = prepare_corpus(
-        [trial],
-        filter_order=int(model.filter_order),
-        cutoff=float(model.cutoff),
-        segmentation="seg1",
-        zvc_threshold_deg=float(model.zvc_threshold_deg),
-        window=float(model.window),
-    )
+    seg1_corpus = model.prepare([trial], segmentation="seg1")
     c = zvc(times, angles, min_change_deg=float(model.zvc_threshold_deg))
     files.append(
         figures.plot_segmentation(
@@ -283,15 +259,18 @@ def _trial_figures(
         )
     )
     # Fig. 6: z(t) and the SEG-2 threshold.
-    thr = model.seg2_threshold_ if model.seg2_threshold_ is not None else model.seg2_threshold
-    trace = seg2_trace(times, angles, repetitions=trial.repetitions, threshold=thr)
+    seg2_corpus = model.prepare([trial], segmentation="seg2")
+    seg = seg2_corpus.segmentation
+    z = seg.z if seg.z is not None else np.zeros_like(times)
+    c_used = float(seg.trial_thresholds[0] if seg.trial_thresholds is not None else seg.threshold)
+    segs = seg2_corpus.segments[0]
     files.append(
         figures.plot_seg2(
             out / "seg2_threshold.png",
             times,
-            trace.z,
-            trace.threshold,
-            trace.segments,
+            z,
+            c_used,
+            segs,
             truth_boundaries=truth_b,
             title=f"Trial {name}: SEG-2 (z(t) below c delimits the segments)",
         )
@@ -308,25 +287,19 @@ def _trial_figures(
             orig,
             rec_p,
             rec_c,
-            boundaries=np.unique(trace.segments.ravel()),
+            boundaries=np.unique(segs.ravel()),
             title=f"Trial {name}: whole movement from consecutive SEG-2 segments",
             errors_deg=(ep, ec),
         )
     )
     # Fig. 10: one segment (the middle SEG-2 segment of the example trial).
-    segs = trace.segments
     j = len(segs) // 2
     s, e = segs[j]
-    sv = corpus_vectors([times], [angles], [segs[j : j + 1]], n_samples=int(model.n_samples))
-    p = model.transform(sv.vectors)
     mask = (times >= s) & (times <= e)
-    tt = times[mask]
-    # to_trial_angles adds the segment's whole-turn offsets of γ/α back (visprim.vectors).
-    curve_p = sv.to_trial_angles(model._reconstruct_vectors(p, "projection"))[0]
-    curve_c = sv.to_trial_angles(model._reconstruct_vectors(p, "cluster"))[0]
-    label = int(model.assign(p)[0][0])
-    rp = stretch(curve_p, s, e, tt)
-    rc = stretch(curve_c, s, e, tt)
+    # reconstruct_segment adds the segment's whole-turn offsets of γ/α back.
+    tt, rp = model.reconstruct_segment(times, angles, s, e, source="projection")
+    _, rc = model.reconstruct_segment(times, angles, s, e, source="cluster")
+    label = int(model.predict(model.vectorize(seg2_corpus).vectors[j : j + 1])[0])
     files.append(
         figures.plot_reconstruction(
             out / "segment_reconstruction.png",

@@ -21,6 +21,9 @@ from visprim.segment.clock import times_to_frames
 from visprim.segment.seg1 import DEFAULT_WINDOW, seg1_from_crossings
 from visprim.segment.seg2 import (
     DEFAULT_MIN_TRAVEL_DEG,
+    ROBUST_REST,
+    TUNINGS,
+    robust_seg2_thresholds,
     seg2_boundaries,
     tune_seg2_threshold_concatenated,
 )
@@ -46,6 +49,8 @@ class CorpusSegmentation:
     n_frames : int, total frames of the concatenation
     threshold : float or None, the SEG-2 threshold c in (rad/s)² (None for SEG-1)
     z : (n_frames,) float64 or None, SEG-2's Σ θ̇ᵢ² per frame, (rad/s)² (None for SEG-1)
+    trial_thresholds : (n_trials,) float64 or None, each trial's own c (robust tuning; None
+        when every trial uses ``threshold``)
     """
 
     method: str
@@ -58,6 +63,7 @@ class CorpusSegmentation:
     n_frames: int
     threshold: float | None = None
     z: NDArray[np.float64] | None = None
+    trial_thresholds: NDArray[np.float64] | None = None
 
     @property
     def n_segments(self) -> int:
@@ -95,11 +101,13 @@ def segment_concatenated(
     *,
     repetitions: ArrayLike | int = 1,
     threshold: float | None = None,
+    tuning: str = "repetitions",
     coverage: float = 1.0,
     min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
     window: float = DEFAULT_WINDOW,
     min_change_deg: float = DEFAULT_MIN_CHANGE_DEG,
     min_dofs: int = 2,
+    seg1_adaptive: bool = True,
 ) -> CorpusSegmentation:
     """Segment every trial of a concatenated corpus.
 
@@ -111,12 +119,18 @@ def segment_concatenated(
     repetitions : int or (n_trials,) ints
         SEG-2 only: repetitions of each trial, for tuning the global threshold.
     threshold : float, optional
-        SEG-2 only: c in (rad/s)²; default: tuned on this corpus
-        (:func:`~visprim.segment.tune_seg2_threshold`, with ``coverage``).
+        SEG-2 only: c in (rad/s)²; default: tuned on this corpus.
+    tuning : "repetitions" or "robust"
+        SEG-2 only, how an unset threshold is tuned: the paper's rule from the repetitions
+        (:func:`~visprim.segment.tune_seg2_threshold`, with ``coverage``), or scaled to the
+        corpus' movement speed with per-trial thresholds for slow trials
+        (:func:`~visprim.segment.seg2.robust_seg2_thresholds`).
     min_travel_deg : float, degrees
         SEG-2 only: travel that makes a run of ``z ≥ c`` a movement (:mod:`.seg2`).
     window, min_change_deg, min_dofs
         SEG-1 only: see :func:`~visprim.segment.seg1`.
+    seg1_adaptive : bool
+        SEG-1 only: shorter window for fast cyclic motion (:mod:`.seg1`; False: the paper's).
     """
     t = np.ascontiguousarray(times, dtype=np.float64)
     a = np.ascontiguousarray(angles, dtype=np.float64)
@@ -132,20 +146,35 @@ def segment_concatenated(
     v = velocity_concatenated(t, a, off)
     z = None
     c = None
+    per_trial = None
     if method == "seg1":
         crossings = zvc_concatenated(t, a, off, min_change_deg=min_change_deg, velocity=v)
-        trial, start, end = seg1_from_crossings(crossings, window=window, min_dofs=min_dofs)
+        trial, start, end = seg1_from_crossings(
+            crossings, window=window, min_dofs=min_dofs, adaptive=seg1_adaptive
+        )
         start_frame = times_to_frames(t, off, trial, start)
         end_frame = times_to_frames(t, off, trial, end)
     elif method == "seg2":
         z = np.einsum("ij,ij->i", v, v)
-        if threshold is None:
+        if tuning not in TUNINGS:
+            raise ValueError(f"tuning must be one of {list(TUNINGS)}, got {tuning!r}")
+        if tuning == "robust":
+            c, per_trial = robust_seg2_thresholds(z, off, threshold=threshold)
+        elif threshold is not None:
+            c = float(threshold)
+        else:
             c = tune_seg2_threshold_concatenated(
                 t, z, off, repetitions, min_travel_deg=min_travel_deg, coverage=coverage
             )
-        else:
-            c = float(threshold)
-        b_trial, b_frame, b_time = seg2_boundaries(t, z, off, c, min_travel_deg=min_travel_deg)
+        used = c if per_trial is None else per_trial
+        b_trial, b_frame, b_time = seg2_boundaries(
+            t,
+            z,
+            off,
+            used,
+            min_travel_deg=min_travel_deg,
+            rest_fraction=ROBUST_REST if tuning == "robust" else None,
+        )
         same = b_trial[1:] == b_trial[:-1]
         trial = b_trial[:-1][same]
         start, end = b_time[:-1][same], b_time[1:][same]
@@ -164,6 +193,7 @@ def segment_concatenated(
         n_frames=int(a.shape[0]),
         threshold=c,
         z=z,
+        trial_thresholds=per_trial,
     )
 
 

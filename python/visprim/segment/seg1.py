@@ -17,6 +17,14 @@ Algorithm (per trial, a whole corpus per call; the grouping of step 2 runs in th
 
 Consecutive snips are more than ``window`` apart, so every segment lasts more than
 ``window`` seconds.
+
+Fast cyclic motion (``adaptive=True``, the default): when a trial's DOFs reverse faster than
+the window (a wave, arm swing in a run), single linkage chains every crossing of the trial
+into one event and SEG-1 finds nothing. So a trial's window is ``min(window, h / 2)``, with
+``h`` the trial's typical half-cycle: the median time between consecutive crossings of the
+same DOF. Each half-cycle's reversal is then an event of its own, and a segment per
+half-cycle is cut. Slower movements keep the paper's window. ``adaptive=False`` is the
+paper's rule.
 """
 
 from __future__ import annotations
@@ -44,10 +52,36 @@ class Seg1Events(NamedTuple):
     is_snip: NDArray[np.bool_]  #: (m,) n_dofs >= min_dofs
 
 
+def _trial_windows(
+    trial: NDArray[np.int64], dof: NDArray[np.int64], time: NDArray[np.float64], window: float
+) -> NDArray[np.float64]:
+    """Per crossing, its trial's window ``min(window, h / 2)`` (module docstring)."""
+    out = np.full(time.size, float(window))
+    if time.size < 2:
+        return out
+    order = np.lexsort((time, dof, trial))
+    t, d, tr = time[order], dof[order], trial[order]
+    same = (tr[1:] == tr[:-1]) & (d[1:] == d[:-1])
+    gaps, gap_trial = np.diff(t)[same], tr[1:][same]
+    if gaps.size == 0:
+        return out
+    by = np.argsort(gap_trial, kind="stable")
+    gaps, gap_trial = gaps[by], gap_trial[by]
+    trials, first = np.unique(gap_trial, return_index=True)
+    halves = np.array([np.median(g) for g in np.split(gaps, first[1:])])
+    per_trial = dict(zip(trials.tolist(), np.minimum(window, 0.5 * halves).tolist(), strict=True))
+    return np.array([per_trial.get(k, window) for k in trial.tolist()])
+
+
 def seg1_events(
-    crossings: CorpusCrossings, *, window: float = DEFAULT_WINDOW, min_dofs: int = 2
+    crossings: CorpusCrossings,
+    *,
+    window: float = DEFAULT_WINDOW,
+    min_dofs: int = 2,
+    adaptive: bool = True,
 ) -> Seg1Events:
-    """Group the ZVCs of a corpus into events (steps 2–3 of the module docstring)."""
+    """Group the ZVCs of a corpus into events (steps 2–3 of the module docstring; with
+    ``adaptive``, a shorter window for trials of fast cyclic motion)."""
     if not (np.isfinite(window) and window > 0):
         raise ValueError(f"window must be a positive number of seconds, got {window!r}")
     if int(min_dofs) < 1:
@@ -58,16 +92,29 @@ def seg1_events(
     if trial.size > 1 and np.any(trial[1:] < trial[:-1]):
         order = np.argsort(trial, kind="stable")  # the kernel wants crossings grouped by trial
         trial, dof, time = trial[order], dof[order], time[order]
-    ev_trial, ev_time, n_dofs = kernels.seg1_events(trial, dof, time, float(window))
+    if not adaptive:
+        ev_trial, ev_time, n_dofs = kernels.seg1_events(trial, dof, time, float(window))
+        return Seg1Events(ev_trial, ev_time, n_dofs, n_dofs >= int(min_dofs))
+    # A trial's own window w_i: its clock is scaled by window / w_i for the kernel (one
+    # window for all), and the event times scaled back.
+    scale = float(window) / _trial_windows(trial, dof, time, float(window))
+    ev_trial, ev_time, n_dofs = kernels.seg1_events(trial, dof, time * scale, float(window))
+    trial_scale = np.ones(int(trial.max()) + 1 if trial.size else 0)
+    trial_scale[trial] = scale
+    ev_time = np.asarray(ev_time) / trial_scale[np.asarray(ev_trial, dtype=np.int64)]
     return Seg1Events(ev_trial, ev_time, n_dofs, n_dofs >= int(min_dofs))
 
 
 def seg1_from_crossings(
-    crossings: CorpusCrossings, *, window: float = DEFAULT_WINDOW, min_dofs: int = 2
+    crossings: CorpusCrossings,
+    *,
+    window: float = DEFAULT_WINDOW,
+    min_dofs: int = 2,
+    adaptive: bool = True,
 ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
     """SEG-1 segments of a corpus from its ZVCs: ``(trial, start s, end s)`` arrays, sorted
     by trial then time."""
-    ev = seg1_events(crossings, window=window, min_dofs=min_dofs)
+    ev = seg1_events(crossings, window=window, min_dofs=min_dofs, adaptive=adaptive)
     keep = (ev.trial[1:] == ev.trial[:-1]) & ev.is_snip[1:] & ev.is_snip[:-1]
     return ev.trial[:-1][keep], ev.time[:-1][keep], ev.time[1:][keep]
 
@@ -79,6 +126,7 @@ def seg1(
     *,
     min_change_deg: float = DEFAULT_MIN_CHANGE_DEG,
     min_dofs: int = 2,
+    adaptive: bool = True,
 ) -> NDArray[np.float64]:
     """SEG-1 segments of one trial (see the module docstring).
 
@@ -94,6 +142,8 @@ def seg1(
         Significant-movement threshold of the ZVCs (:mod:`visprim.segment.zvc`).
     min_dofs : int
         Distinct DOFs an event needs to be a snip (default 2: "more than one DOF").
+    adaptive : bool
+        Shorter window for fast cyclic motion (default True; False: the paper's rule).
 
     Returns
     -------
@@ -104,5 +154,5 @@ def seg1(
     if a.ndim != 2:
         raise ValueError(f"angles must have shape (T, channels), got {a.shape}")
     c = zvc_concatenated(times, a, np.zeros(1, dtype=np.int64), min_change_deg=min_change_deg)
-    _, start, end = seg1_from_crossings(c, window=window, min_dofs=min_dofs)
+    _, start, end = seg1_from_crossings(c, window=window, min_dofs=min_dofs, adaptive=adaptive)
     return np.stack([start, end], axis=1) if start.size else np.zeros((0, 2))

@@ -42,6 +42,27 @@ of repetitions; one global ``c`` serves the whole corpus:
 
 A corpus of more than ``max_trials`` (2000) trials is tuned on ``max_trials`` trials spread
 evenly over it (deterministic), which keeps the tuning cost bounded.
+
+Robust tuning for real recordings (:func:`robust_seg2_thresholds`)
+-------------------------------------------------------------------
+Real recordings carry no repetition count, and the rule above then rests on the plateau of
+the corpus' segment count, which one near-static trial (it needs a tiny ``c`` to give any
+segment) or a few more or fewer trials move by orders of magnitude. ``tuning="robust"``
+instead scales ``c`` to how fast the corpus moves:
+
+* each trial's *movement speed* ``s_i`` is the 95th percentile of its ``z`` (a high
+  quantile: most frames of a recording may be rest, yet one spike does not set it);
+* the corpus' ``c = κ · median_i s_i`` with ``κ = 0.02`` (``ROBUST_FRACTION``): a stroke
+  starts and ends where the squared speed is 2 % of a typical peak, i.e. the speed about
+  14 % of it. The median ignores static trials and moves little when trials come or go;
+* a slow trial (an elderly raise-up, a careful reach) is cut at the same *relative* speed:
+  its own threshold is ``c_i = clip(κ s_i, c / ρ, c)`` with ``ρ = 100`` (``ROBUST_SLOWEST``),
+  so movements down to 10x slower than typical keep their strokes, while a near-static
+  trial's jitter is still judged against ``c / ρ`` (and the 5° travel of rule 1);
+* a recording may start or end in the middle of a movement, or ease in and out of it more
+  slowly than the threshold: the first and last boundaries are where the arm is at rest,
+  ``z ≤ c_i / 25`` (a fifth of the threshold speed, ``ROBUST_REST``), or the trial's ends,
+  rather than the nearest local minimum of ``z``.
 """
 
 from __future__ import annotations
@@ -59,6 +80,7 @@ __all__ = [
     "Seg2Trace",
     "seg2",
     "seg2_boundaries",
+    "robust_seg2_thresholds",
     "seg2_segment_counts",
     "seg2_trace",
     "speed_squared",
@@ -75,6 +97,15 @@ _N_GRID = 64
 _MAX_TRIALS = 2000
 #: z below this fraction of c counts as standing still when walking to an onset / offset.
 _STILL = 1e-6
+#: Robust tuning: c as a fraction κ of the median trial's 95th-percentile z.
+ROBUST_FRACTION: float = 0.02
+#: Robust tuning: a trial's own threshold may go down to c / ρ for slow movements.
+ROBUST_SLOWEST: float = 100.0
+_ROBUST_QUANTILE = 0.95
+#: Robust tuning: the arm is at rest (onset / offset) below this fraction of c_i.
+ROBUST_REST: float = 1.0 / 25.0
+#: Names of the threshold tunings (:func:`tune_seg2_threshold_concatenated`).
+TUNINGS: tuple[str, ...] = ("repetitions", "robust")
 
 
 def speed_squared_concatenated(
@@ -133,9 +164,10 @@ class _Corpus:
         return cls(t, zz, off, trial_of, first, last, travel)
 
     def significant_runs(
-        self, c: float, min_travel: float
+        self, c: float | NDArray[np.float64], min_travel: float
     ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-        """First and last frame of every significant run of ``z ≥ c``, in corpus order."""
+        """First and last frame of every significant run of ``z ≥ c``, in corpus order
+        (``c`` one value or one per frame)."""
         above = self.z >= c
         prev = np.concatenate([[False], above[:-1]]) & ~self.first
         nxt = np.concatenate([above[1:], [False]]) & ~self.last
@@ -146,9 +178,13 @@ class _Corpus:
 
 
 def _boundaries(
-    corpus: _Corpus, c: float, min_travel: float
+    corpus: _Corpus,
+    c: float | NDArray[np.float64],
+    min_travel: float,
+    rest: float | NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """(trial, frame) of every SEG-2 boundary, sorted by trial and frame."""
+    """(trial, frame) of every SEG-2 boundary, sorted by trial and frame; ``rest`` (z at
+    or below which the arm is at rest) replaces the local minima as onsets and offsets."""
     z, n = corpus.z, corpus.z.size
     s, e = corpus.significant_runs(c, min_travel)
     if s.size == 0:
@@ -162,12 +198,18 @@ def _boundaries(
     # Onset: last local minimum of z at or before the run's start (a "stop" frame is a
     # trial's first frame, one not above its predecessor, or one at rest).
     stop_back = corpus.first | still
-    stop_back[1:] |= z[:-1] >= z[1:]
+    if rest is None:
+        stop_back[1:] |= z[:-1] >= z[1:]
+    else:
+        stop_back |= z <= rest
     last_stop = np.maximum.accumulate(np.where(stop_back, idx, 0))
     onset = last_stop[s[first_run]]
     # Offset: first local minimum of z at or after the run's end.
     stop_fwd = corpus.last | still
-    stop_fwd[:-1] |= z[1:] >= z[:-1]
+    if rest is None:
+        stop_fwd[:-1] |= z[1:] >= z[:-1]
+    else:
+        stop_fwd |= z <= rest
     next_stop = np.minimum.accumulate(np.where(stop_fwd, idx, n)[::-1])[::-1]
     offset = next_stop[e[last_run]]
     # Between consecutive significant runs of a trial: argmin of z over the rest between.
@@ -195,17 +237,23 @@ def seg2_boundaries(
     times: ArrayLike,
     z: ArrayLike,
     offsets: ArrayLike,
-    threshold: float,
+    threshold: float | ArrayLike,
     *,
     min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
+    rest_fraction: float | None = None,
 ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
     """SEG-2 boundaries of a concatenated corpus (rules in the module docstring).
 
     Parameters
     ----------
     times : (N,) seconds; z : (N,) (rad/s)²; offsets : (n_trials,) first frames.
-    threshold : float, c in (rad/s)².
+    threshold : float or (n_trials,) array, c in (rad/s)² (one for all, or per trial).
     min_travel_deg : float, degrees.
+    rest_fraction : float, optional
+        If given, a trial's first (last) boundary is the last frame before its first (the
+        first frame after its last) significant run where ``z ≤ rest_fraction · c``, or the
+        trial's end: slow lead-ins and returns stay in the movement. Default: the nearest
+        local minimum of z (the paper-faithful rule of the module docstring).
 
     Returns
     -------
@@ -213,12 +261,57 @@ def seg2_boundaries(
     every boundary, sorted by trial then time. A trial with ``n`` segments has ``n + 1``
     boundaries (none without a segment).
     """
-    c = float(threshold)
-    if not (np.isfinite(c) and c > 0):
+    c = np.asarray(threshold, dtype=np.float64)
+    if not (np.all(np.isfinite(c)) and np.all(c > 0)):
         raise ValueError(f"threshold must be a positive number in (rad/s)^2, got {threshold!r}")
     corpus = _Corpus.build(times, z, offsets)
-    trial, frame = _boundaries(corpus, c, _min_travel(min_travel_deg))
+    if c.ndim == 1:
+        if c.shape != corpus.offsets.shape:
+            raise ValueError(f"{c.size} thresholds for {corpus.offsets.size} trials")
+        c = c[corpus.trial_of]
+    elif c.ndim != 0:
+        raise ValueError(f"threshold must be a number or one per trial, got shape {c.shape}")
+    cc = c if c.ndim else float(c)
+    rest = None if rest_fraction is None else float(rest_fraction) * cc
+    trial, frame = _boundaries(corpus, cc, _min_travel(min_travel_deg), rest)
     return trial, frame - corpus.offsets[trial], corpus.t[frame]
+
+
+def robust_seg2_thresholds(
+    z: ArrayLike,
+    offsets: ArrayLike,
+    *,
+    threshold: float | None = None,
+    fraction: float = ROBUST_FRACTION,
+    slowest: float = ROBUST_SLOWEST,
+) -> tuple[float, NDArray[np.float64]]:
+    """The robust SEG-2 thresholds of a concatenated corpus (module docstring).
+
+    Parameters
+    ----------
+    z : (N,) (rad/s)², concatenated; offsets : (n_trials,) first frames.
+    threshold : the corpus' c if already known (e.g. fitted on training data); then only
+        the trials' own thresholds are derived here.
+    fraction : κ, c as a fraction of the median trial's movement speed (z units).
+    slowest : ρ, how far below c a slow trial's own threshold may go.
+
+    Returns
+    -------
+    ``(c, c_i)``: the corpus' threshold and each trial's, (rad/s)².
+    """
+    zz = np.ascontiguousarray(z, dtype=np.float64)
+    off = np.ascontiguousarray(offsets, dtype=np.int64)
+    if not (0 < fraction < 1) or not slowest >= 1:
+        raise ValueError(f"need 0 < fraction < 1 and slowest >= 1, got {fraction}, {slowest}")
+    speeds = np.array([np.quantile(part, _ROBUST_QUANTILE) for part in np.split(zz, off[1:])])
+    moving = speeds[speeds > 0]
+    if threshold is not None:
+        c = float(threshold)
+    elif moving.size == 0:
+        raise ValueError("the corpus never moves (z is 0 everywhere); no threshold exists")
+    else:
+        c = float(fraction * np.median(moving))
+    return c, np.clip(fraction * speeds, c / float(slowest), c)
 
 
 def _min_travel(min_travel_deg: float) -> float:
