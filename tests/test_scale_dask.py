@@ -79,6 +79,37 @@ def test_dask_fit_of_a_trial_list(client, in_memory):
     assert_close_fit(in_memory, m)
 
 
+def test_cli_learn_on_a_cluster(client, tmp_path, capsys):
+    out = tmp_path / "m.npz"
+    address = client.scheduler.address
+    code = cli_main(
+        [
+            "learn",
+            "--generated",
+            "--subjects",
+            "2",
+            "--stimuli",
+            "8",
+            "--clusters",
+            "6",
+            "--n-init",
+            "2",
+            "--out",
+            str(out),
+            "--dask",
+            address,
+        ]
+    )
+    assert code == 0 and out.exists()
+    printed = capsys.readouterr().out
+    assert "Dask" in printed and "model written" in printed
+    m = PrimitiveModel.load(out)
+    ref = PrimitiveModel(n_clusters=6, n_init=2).fit(imitation_experiment(2, 8, 0))
+    assert m.n_training_segments_ == ref.n_training_segments_
+    assert abs(m.inertia_ - ref.inertia_) <= 0.005 * ref.inertia_
+
+
+# Worker kills last: the replaced workers start cold.
 class KillOnce(GeneratedCorpus):
     """Reading item ``victim`` kills the worker process the first time (a marker file
     remembers it)."""
@@ -116,33 +147,3 @@ def test_a_task_that_keeps_killing_workers_ends_with_a_clear_error(client, in_me
     with pytest.raises(RuntimeError, match="kept killing workers"):
         PrimitiveModel(**params).fit(corpus, client=client)
     client.wait_for_workers(2, timeout=30)
-
-
-def test_cli_learn_on_a_cluster(client, tmp_path, capsys):
-    out = tmp_path / "m.npz"
-    address = client.scheduler.address
-    code = cli_main(
-        [
-            "learn",
-            "--generated",
-            "--subjects",
-            "2",
-            "--stimuli",
-            "8",
-            "--clusters",
-            "6",
-            "--n-init",
-            "2",
-            "--out",
-            str(out),
-            "--dask",
-            address,
-        ]
-    )
-    assert code == 0 and out.exists()
-    printed = capsys.readouterr().out
-    assert "Dask" in printed and "model written" in printed
-    m = PrimitiveModel.load(out)
-    ref = PrimitiveModel(n_clusters=6, n_init=2).fit(imitation_experiment(2, 8, 0))
-    assert m.n_training_segments_ == ref.n_training_segments_
-    assert abs(m.inertia_ - ref.inertia_) <= 0.005 * ref.inertia_

@@ -27,13 +27,14 @@ Dask (:func:`fit_dask`, the only code that imports ``dask.distributed``; install
 ``visprim[dask]``): items are split in partitions spread over the workers. A partition task
 computes its vectors (kept on the worker); its covariance accumulator is returned and the
 accumulators are merged in a binary tree; projections are computed where the vectors are.
-k-means: the best of ``n_init`` k-means runs (k-means++ seeding and Lloyd, in the Rust
-kernel) on a deterministic sample of the projections seeds Lloyd's iterations on all of
-them, run as map (per-partition sums, counts and inertia) / reduce (sum) until the centres
-move by less than ``tol`` (scikit-learn's scaling: ``tol × mean variance``; the variance of
-the projections is the kept eigenvalues) or ``max_iter``. A lost worker's tasks are re-run by
+k-means: ``n_init`` k-means runs (k-means++ seeding and Lloyd, in the Rust kernel) on a
+deterministic random sample of the projections (:data:`DEFAULT_SAMPLE` rows); the run whose
+centres give the lowest inertia on all the projections seeds Lloyd's iterations on all of
+them, run as map (per-worker sums, counts and inertia) / reduce (sum) until the centres move
+by less than ``tol`` (scikit-learn's scaling: ``tol × mean variance``; the variance of the
+projections is the kept eigenvalues) or ``max_iter``. A lost worker's tasks are re-run by
 Dask from the corpus (their inputs); a task that keeps killing workers ends the fit with a
-:class:`RuntimeError` naming the partition's items.
+:class:`RuntimeError`.
 """
 
 from __future__ import annotations
@@ -397,14 +398,19 @@ def _project_task(block: Block, mean_e: NDArray[np.float64], e: NDArray[np.float
     return block.vectors @ e - mean_e
 
 
-def _sample_task(p: NDArray[np.float64], first: int, step: int) -> NDArray[np.float64]:
-    start = (-first) % step
-    return p[start::step]
+def _sample_task(p: NDArray[np.float64], first: int, fraction: float, seed: int) -> Any:
+    """A random (seeded by the partition's first row: deterministic) ``fraction`` of the
+    rows; random rather than strided, so that periodic corpora are not aliased."""
+    m = min(p.shape[0], int(round(p.shape[0] * fraction)))
+    rng = np.random.default_rng([seed, first])
+    return p[np.sort(rng.choice(p.shape[0], size=m, replace=False))]
 
 
 def _lloyd_task(
     p: NDArray[np.float64], centers: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
+    """Map step of one Lloyd iteration: per-cluster sums (k, f) and counts (k,) of the rows
+    nearest each centre, and their squared distances summed (inertia)."""
     k, f = centers.shape
     if p.shape[0] == 0:
         return np.zeros((k, f)), np.zeros(k), 0.0
@@ -412,6 +418,16 @@ def _lloyd_task(
     counts = np.bincount(labels, minlength=k).astype(np.float64)
     sums = np.stack([np.bincount(labels, weights=p[:, j], minlength=k) for j in range(f)], 1)
     return sums, counts, float(np.dot(dist, dist))
+
+
+def _inertia_task(p: NDArray[np.float64], candidates: NDArray[np.float64]) -> Any:
+    """Inertia of the rows for each of several centre sets (R, k, f) → (R,)."""
+    out = np.zeros(candidates.shape[0])
+    if p.shape[0]:
+        for r, c in enumerate(candidates):
+            dist = kernels.kmeans_predict(p, c, n_threads=1)[1]
+            out[r] = float(np.dot(dist, dist))
+    return out
 
 
 def _assign_task(
@@ -538,23 +554,40 @@ def _kmeans_dask(
 ) -> tuple[NDArray[np.float64], NDArray[np.int64], float, int]:
     n = rows[-1]
     k = int(model.n_clusters)
-    step = max(1, math.ceil(n / max(sample_size, k)))
+    fraction = min(1.0, max(sample_size, 20 * k) / n)
     sample = np.concatenate(
         client.gather(
-            [client.submit(_sample_task, p, rows[i], step, pure=False) for i, p in enumerate(projs)]
+            [
+                client.submit(_sample_task, p, rows[i], fraction, int(model.seed), pure=False)
+                for i, p in enumerate(projs)
+            ]
         )
     )
-    seeded = kernels.kmeans(
-        np.ascontiguousarray(sample),
-        k,
-        n_init=int(model.n_init),
-        max_iter=int(model.max_iter),
-        tol=float(model.tol),
-        seed=int(model.seed),
+    if sample.shape[0] < k:
+        sample = np.concatenate(client.gather(projs))
+    # n_init k-means runs on the sample; the one with the lowest inertia on all the rows
+    # starts Lloyd's iterations on all of them.
+    candidates = np.stack(
+        [
+            kernels.kmeans(
+                np.ascontiguousarray(sample),
+                k,
+                max_iter=int(model.max_iter),
+                tol=float(model.tol),
+                seed=int(model.seed) + r,
+            ).centers
+            for r in range(int(model.n_init))
+        ]
     )
-    centers = np.asarray(seeded.centers, dtype=np.float64)
     groups, members = _group_by_worker(client, projs)
     del projs
+    if candidates.shape[0] > 1:
+        scores = client.gather(
+            [client.submit(_inertia_task, g, candidates, pure=False) for g in groups]
+        )
+        centers = candidates[int(np.argmin(np.sum(scores, axis=0)))]
+    else:
+        centers = candidates[0]
     tol = float(model.tol) * float(np.mean(variances))
     n_iter = 0
     for n_iter in range(1, int(model.max_iter) + 1):  # noqa: B007 (reported after the loop)
