@@ -159,17 +159,15 @@ def chunk_block(settings: Any, corpus: LazyCorpus, items: Sequence[int], first: 
     if not trials:
         return Block(np.zeros((0, 0)), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0), [])
     prepared = settings.prepare(trials, tune_seg2=False)
-    counts = prepared.segmentation.counts()
-    about = dict(
-        arms=tuple(prepared.arms),
-        n_without=int(np.sum(counts == 0)),
-        n_short=int(prepared.n_short),
-    )
+    arms = tuple(prepared.arms)
+    n_without = int(np.sum(prepared.segmentation.counts() == 0))
+    n_short = int(prepared.n_short)
     if prepared.segmentation.n_segments == 0:
         empty = np.zeros(0)
-        return Block(np.zeros((0, 0)), np.zeros(0, dtype=np.int64), empty, empty, names, **about)
+        no_trial = np.zeros(0, dtype=np.int64)
+        return Block(np.zeros((0, 0)), no_trial, empty, empty, names, arms, n_without, n_short)
     sv = settings.vectorize(prepared)
-    return Block(sv.vectors, sv.trial, sv.starts, sv.ends, names, **about)
+    return Block(sv.vectors, sv.trial, sv.starts, sv.ends, names, arms, n_without, n_short)
 
 
 def _accumulate(block: Block, n_threads: int | None = None) -> Any:
@@ -417,7 +415,7 @@ def _lloyd_task(
     labels, dist = kernels.kmeans_predict(p, centers, n_threads=1)
     counts = np.bincount(labels, minlength=k).astype(np.float64)
     sums = np.stack([np.bincount(labels, weights=p[:, j], minlength=k) for j in range(f)], 1)
-    return sums, counts, float(np.dot(dist, dist))
+    return sums.astype(np.float64), counts, float(np.dot(dist, dist))
 
 
 def _inertia_task(p: NDArray[np.float64], candidates: NDArray[np.float64]) -> Any:
