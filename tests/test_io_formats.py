@@ -561,13 +561,13 @@ def test_gap_error_type_is_a_read_error() -> None:
 
 
 def test_marker_csv_dispatch_round_trip_and_options(tmp_path: Path) -> None:
-    from visprim.markers_csv import write_marker_csv
+    from visprim.io.markers_csv import write_marker_csv
 
     (tmp_path / "mix.bvh").write_text(_rig_bvh(MIXAMO, scale=100.0))
     trial = read(tmp_path / "mix.bvh")
     write_marker_csv(tmp_path / "mix.csv", trial)
     back = read(tmp_path / "mix.csv")
-    # The CSV keeps 0.01 mm and 1 µs (visprim.markers_csv): the trial survives the trip.
+    # The CSV keeps 0.01 mm and 1 µs (visprim.io.markers_csv): the trial survives the trip.
     assert np.abs(back.markers - trial.markers).max() <= 0.5e-5 + 1e-12
     assert np.abs(back.times - trial.times).max() <= 0.5e-6 + 1e-12
     assert read(tmp_path / "mix.csv", repetitions=3).repetitions == 3

@@ -295,7 +295,7 @@ def test_corrupt_asf_raises_a_read_error_or_reads(folder: Path, data: st.DataObj
 
 @pytest.fixture(scope="module")
 def csv_text(folder: Path) -> str:
-    from visprim.markers_csv import write_marker_csv
+    from visprim.io.markers_csv import write_marker_csv
 
     t = np.arange(6) * 0.034
     markers = np.zeros((6, 4, 3)) + np.arange(12).reshape(4, 3) * 0.01 + t[:, None, None]

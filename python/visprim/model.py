@@ -107,8 +107,8 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
     primitive_durations_ : (k,) seconds — mean duration of each primitive's member segments.
     seg2_threshold_ : float or None — the SEG-2 constant used (tuned or given).
     trial_names_ : list of str — names of the training trials.
-    training_vectors_ : (N, d) or None — the training segment vectors (kept in memory after
-        ``fit``; not written to the model file, so ``None`` after :meth:`load`).
+    training_vectors_ : (N, d) or None — the training segment vectors (written to the model
+        file unless ``save(..., include_vectors=False)``).
     error_tables_ : ErrorTables or None — Tables 1–3 once :meth:`error_table` ran (saved).
     training_source_ : dict — how to get the training trials again (for reports).
     """
@@ -663,19 +663,88 @@ class PrimitiveModel(BaseEstimator):  # type: ignore[misc]
 
     # ------------------------------------------------------------------ persistence
 
-    def save(self, path: str | PathLike[str]) -> None:
-        """Write the fitted model to one file (see :mod:`visprim.modelfile`), atomically."""
-        from visprim.modelfile import save_model
+    def save(self, path: str | PathLike[str], *, include_vectors: bool = True) -> None:
+        """Write the fitted model to one file (see :mod:`visprim.modelfile`), atomically.
+
+        ``include_vectors=False`` leaves out the training segment vectors (N × d float64):
+        a smaller file whose :meth:`error_table` only returns the tables computed before
+        saving.
+        """
+        from visprim.modelfile import write_model_file
 
         self._check_fitted()
-        save_model(self, path)
+        arrays: dict[str, Any] = {
+            "mean": self.mean_,
+            "eigenvalues": self.eigenvalues_,
+            "eigenvectors": self.eigenvectors_,
+            "cluster_centers": self.cluster_centers_,
+            "labels": self.labels_,
+            "segment_trial": self.segment_trial_,
+            "segment_starts": self.segment_starts_,
+            "segment_ends": self.segment_ends_,
+            "primitive_durations": self.primitive_durations_,
+        }
+        if include_vectors and getattr(self, "training_vectors_", None) is not None:
+            arrays["training_vectors"] = self.training_vectors_
+        tables = getattr(self, "error_tables_", None)
+        fitted = {
+            "inertia": float(self.inertia_),
+            "n_iter": int(self.n_iter_),
+            "seg2_threshold": None if self.seg2_threshold_ is None else float(self.seg2_threshold_),
+            "n_training_segments": int(self.n_training_segments_),
+            "trial_names": [str(n) for n in self.trial_names_],
+            "training_source": dict(self.training_source_ or {}),
+            "arms": list(getattr(self, "arms_", ("right",))),
+            "n_trials_without_segments": int(getattr(self, "n_trials_without_segments_", 0)),
+            "n_short_trials": int(getattr(self, "n_short_trials_", 0)),
+        }
+        header = {
+            "parameters": self.get_params(),
+            "fitted": fitted,
+            "error_tables": tables.to_dict() if tables is not None else None,
+        }
+        write_model_file(path, header, arrays)
 
     @classmethod
     def load(cls, path: str | PathLike[str]) -> PrimitiveModel:
-        """Read a model written by :meth:`save` (see :mod:`visprim.modelfile`)."""
-        from visprim.modelfile import load_model
+        """Read a model written by :meth:`save` (see :mod:`visprim.modelfile`); its
+        parameters are checked as :meth:`fit` checks them."""
+        from visprim.modelfile import ModelFileError, load_model
 
-        return load_model(path)
+        contents = load_model(path)
+        a, fitted = contents.arrays, contents.fitted
+        arms = fitted.get("arms", ["right"])
+        try:
+            if not isinstance(arms, list) or not 1 <= len(arms) <= 2:
+                raise ValueError(f"arms {arms!r} is not a list of one or two arms")
+            if any(side not in ("right", "left") for side in arms):
+                raise ValueError(f"arms {arms!r} are not 'right'/'left'")
+            model = cls(**contents.parameters)
+            model.arms_ = tuple(arms)
+            model._validate_params()
+            tables = contents.error_tables
+            model.error_tables_ = ErrorTables.from_dict(tables) if tables else None
+        except (TypeError, ValueError, LookupError, AttributeError) as exc:
+            raise ModelFileError(f"{contents.path}: model parameters not accepted: {exc}") from None
+        if a["mean"].shape[0] != model.dim or a["cluster_centers"].shape[1] != model.n_components:
+            raise ModelFileError(
+                f"{contents.path}: damaged model file: array shapes do not fit the parameters"
+            )
+        for name in ("mean", "eigenvalues", "eigenvectors", "cluster_centers", "labels"):
+            setattr(model, name + "_", a[name])
+        for name in ("segment_trial", "segment_starts", "segment_ends", "primitive_durations"):
+            setattr(model, name + "_", a[name])
+        model.training_vectors_ = a.get("training_vectors")
+        model.training_projections_ = None
+        model.inertia_ = float(fitted["inertia"])
+        model.n_iter_ = int(fitted["n_iter"])
+        model.seg2_threshold_ = fitted["seg2_threshold"]
+        model.n_training_segments_ = int(fitted["n_training_segments"]) or len(a["labels"])
+        model.trial_names_ = list(fitted["trial_names"])
+        model.training_source_ = dict(fitted["training_source"])
+        model.n_trials_without_segments_ = int(fitted.get("n_trials_without_segments", 0))
+        model.n_short_trials_ = int(fitted.get("n_short_trials", 0))
+        return model
 
     def __sklearn_is_fitted__(self) -> bool:
         return hasattr(self, "cluster_centers_")

@@ -1,25 +1,36 @@
-"""The model file: one ``.npz`` archive holding a fitted :class:`~visprim.model.PrimitiveModel`.
+"""The model file: one ``.npz`` archive holding a fitted model's arrays and a JSON header.
 
-Format (``format_version`` 1)
+This module is the file layer only: it writes and reads plain arrays and a header, checked;
+:class:`~visprim.model.PrimitiveModel` builds those from itself (``save``) and itself from
+them (``load``). It does not import the model.
+
+Format (``format_version`` 2)
 -----------------------------
-A NumPy ``.npz`` (zip) archive, read with ``allow_pickle=False``, with these members:
+A NumPy ``.npz`` (zip) archive of ``.npy`` members (never pickles), with these members:
 
 ``header``
-    uint8 array: UTF-8 JSON object with
-    ``format`` = ``"visprim.PrimitiveModel"``, ``format_version`` = 1, ``visprim_version``,
-    ``parameters`` (the estimator's constructor arguments), ``fitted`` (scalars: inertia,
-    n_iter, seg2_threshold in (rad/s)², n_training_segments, trial_names, training_source),
-    ``error_tables`` (Tables 1–3 or null) and ``arrays``: for every array member its shape,
-    dtype and SHA-256 of its bytes (damage detection).
+    uint8 array: UTF-8 JSON object with ``format`` = ``"visprim.PrimitiveModel"``,
+    ``format_version`` = 2, ``visprim_version``, ``parameters`` (the estimator's constructor
+    arguments), ``fitted`` (inertia, n_iter, seg2_threshold in (rad/s)², n_training_segments,
+    trial_names, training_source), ``error_tables`` (Tables 1–3 or null), ``arrays`` (for
+    every array member its shape, dtype and SHA-256 of its bytes) and ``header_sha256``: the
+    SHA-256 of the rest of the header as canonical JSON (sorted keys, no spaces). Every byte
+    that matters is therefore checksummed: the header directly, the arrays through it.
 ``mean`` (d,) radians; ``eigenvalues`` (d,) rad², descending; ``eigenvectors`` (d, d), columns;
 ``cluster_centers`` (k, f) in the projection space; ``labels`` (N,) int64;
 ``segment_trial`` (N,) int64; ``segment_starts`` / ``segment_ends`` (N,) seconds;
-``primitive_durations`` (k,) seconds; optionally ``training_vectors`` (N, d) radians.
+``primitive_durations`` (k,) seconds; ``training_vectors`` (N, d) radians (written by
+default, so that a loaded model computes error tables like a fitted one).
 
-Writing is atomic: the archive goes to a temporary file in the target's folder, is flushed
-to disk, then renamed over the target (:func:`os.replace`). Reading refuses another
-``format``/``format_version`` and any damaged file (bad zip, missing member, checksum or
-shape mismatch) with :class:`ModelFileError`, naming the file.
+Writing is atomic: the archive goes to a temporary file ``.<name>.<pid>.<random>.tmp`` in
+the target's folder, is flushed to disk, given the mode a new file gets under the umask,
+then renamed over the target (:func:`os.replace`). Temporary files left by a writer that was
+killed (its process no longer exists) are removed by the next save to the same target.
+
+Reading refuses another ``format``/``format_version`` and any damaged file (bad zip,
+missing member, a header of the wrong structure, checksum or shape mismatch) with
+:class:`ModelFileError` naming the file; array sizes are checked against the zip member
+before anything is allocated.
 """
 
 from __future__ import annotations
@@ -27,23 +38,25 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import json
+import math
 import os
-import tempfile
+import re
+import secrets
 import zipfile
+import zlib
+from collections.abc import Mapping
+from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-if TYPE_CHECKING:
-    from visprim.model import PrimitiveModel
-
 FORMAT = "visprim.PrimitiveModel"
-FORMAT_VERSION = 1
-
-_REQUIRED = (
+FORMAT_VERSION = 2
+#: Array members every model file has (``training_vectors`` is optional).
+REQUIRED_ARRAYS = (
     "mean",
     "eigenvalues",
     "eigenvectors",
@@ -54,74 +67,145 @@ _REQUIRED = (
     "segment_ends",
     "primitive_durations",
 )
+OPTIONAL_ARRAYS = ("training_vectors",)
+#: dtypes the arrays may have (little-endian float64 / int64).
+_DTYPES = {"<f8", "<i8"}
+#: Largest header accepted (bytes); real headers are a few kB (plus trial names).
+MAX_HEADER_BYTES = 64 * 2**20
 
 
 class ModelFileError(ValueError):
     """A model file is not readable: wrong format or version, or damaged."""
 
 
+@dataclass
+class ModelFileContents:
+    """What a model file holds: its checked header and arrays."""
+
+    path: Path
+    header: dict[str, Any]
+    arrays: dict[str, NDArray[Any]]
+
+    @property
+    def parameters(self) -> dict[str, Any]:
+        """The estimator's constructor arguments."""
+        return dict(self.header["parameters"])
+
+    @property
+    def fitted(self) -> dict[str, Any]:
+        """Fitted scalars (inertia, n_iter, seg2_threshold, ...)."""
+        return dict(self.header["fitted"])
+
+    @property
+    def error_tables(self) -> dict[str, Any] | None:
+        """Tables 1–3 as saved (:meth:`visprim.errors.ErrorTables.to_dict`), or None."""
+        tables = self.header.get("error_tables")
+        return dict(tables) if tables is not None else None
+
+
 def _digest(a: NDArray[Any]) -> str:
     return hashlib.sha256(np.ascontiguousarray(a).tobytes()).hexdigest()
 
 
-def save_model(
-    model: PrimitiveModel, path: str | PathLike[str], *, include_vectors: bool = False
+def _canonical(header: Mapping[str, Any]) -> bytes:
+    body = {k: v for k, v in header.items() if k != "header_sha256"}
+    return json.dumps(body, sort_keys=True, separators=(",", ":"), allow_nan=True).encode()
+
+
+def jsonable(v: Any) -> Any:
+    """``v`` with numpy scalars, tuples and paths turned into JSON types."""
+    if isinstance(v, dict):
+        return {str(k): jsonable(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [jsonable(x) for x in v]
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, Path):
+        return str(v)
+    return v
+
+
+def _umask_mode() -> int:
+    """The mode a new regular file gets here (0o666 minus the process umask)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+_TMP = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.[0-9a-f]{16}\.tmp$")
+
+
+def _remove_stale_temporaries(folder: Path, name: str) -> None:
+    """Delete ``.<name>.<pid>.<random>.tmp`` files whose writer process is gone."""
+    try:
+        entries = list(folder.iterdir())
+    except OSError:
+        return
+    for entry in entries:
+        m = _TMP.match(entry.name)
+        if m is None or m["name"] != name:
+            continue
+        pid = int(m["pid"])
+        if pid == os.getpid():
+            continue
+        try:
+            os.kill(pid, 0)
+            continue  # the writer still runs
+        except ProcessLookupError:
+            pass
+        except (PermissionError, OverflowError, OSError):
+            continue  # alive under another user, or unknowable: leave it
+        with contextlib.suppress(OSError):
+            entry.unlink()
+
+
+def write_model_file(
+    path: str | PathLike[str], header: Mapping[str, Any], arrays: Mapping[str, NDArray[Any]]
 ) -> Path:
-    """Write ``model`` to ``path`` atomically (see the module docstring); returns the path.
+    """Write ``arrays`` and ``header`` (the model's ``parameters``, ``fitted`` scalars and
+    ``error_tables``) to ``path`` atomically (see the module docstring); returns the path.
 
-    ``include_vectors=True`` also stores the training segment vectors (N × d float64), so
-    that :meth:`~visprim.model.PrimitiveModel.error_table` can compute new rows after
-    loading.
+    ``format``, ``format_version``, ``visprim_version``, ``arrays`` and ``header_sha256``
+    are filled in here.
     """
-    import visprim
+    from visprim import __version__
 
-    model._check_fitted()
     path = Path(path)
-    arrays: dict[str, NDArray[Any]] = {
-        "mean": np.asarray(model.mean_, dtype=np.float64),
-        "eigenvalues": np.asarray(model.eigenvalues_, dtype=np.float64),
-        "eigenvectors": np.asarray(model.eigenvectors_, dtype=np.float64),
-        "cluster_centers": np.asarray(model.cluster_centers_, dtype=np.float64),
-        "labels": np.asarray(model.labels_, dtype=np.int64),
-        "segment_trial": np.asarray(model.segment_trial_, dtype=np.int64),
-        "segment_starts": np.asarray(model.segment_starts_, dtype=np.float64),
-        "segment_ends": np.asarray(model.segment_ends_, dtype=np.float64),
-        "primitive_durations": np.asarray(model.primitive_durations_, dtype=np.float64),
+    missing = [n for n in REQUIRED_ARRAYS if n not in arrays]
+    if missing:
+        raise ValueError(f"write_model_file: arrays missing {', '.join(missing)}")
+    unknown = set(arrays) - set(REQUIRED_ARRAYS) - set(OPTIONAL_ARRAYS)
+    if unknown:
+        raise ValueError(f"write_model_file: unknown arrays {', '.join(sorted(unknown))}")
+    members = {
+        name: np.ascontiguousarray(
+            a, dtype=np.int64 if np.asarray(a).dtype.kind in "iu" else np.float64
+        )
+        for name, a in arrays.items()
     }
-    if include_vectors and getattr(model, "training_vectors_", None) is not None:
-        arrays["training_vectors"] = np.asarray(model.training_vectors_, dtype=np.float64)
-    tables = getattr(model, "error_tables_", None)
-    header = {
+    full: dict[str, Any] = {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
-        "visprim_version": visprim.__version__,
-        "parameters": {k: _jsonable(v) for k, v in model.get_params().items()},
-        "fitted": {
-            "inertia": float(model.inertia_),
-            "n_iter": int(model.n_iter_),
-            "seg2_threshold": None
-            if model.seg2_threshold_ is None
-            else float(model.seg2_threshold_),
-            "n_training_segments": int(model.n_training_segments_),
-            "arms": list(getattr(model, "arms_", ("right",))),
-            "trial_names": [str(n) for n in model.trial_names_],
-            "training_source": _jsonable(model.training_source_),
-        },
-        "error_tables": tables.to_dict() if tables is not None else None,
+        "visprim_version": __version__,
+        **{k: jsonable(v) for k, v in header.items()},
         "arrays": {
             name: {"shape": list(a.shape), "dtype": a.dtype.str, "sha256": _digest(a)}
-            for name, a in arrays.items()
+            for name, a in members.items()
         },
     }
-    blob = np.frombuffer(json.dumps(header, indent=1).encode("utf-8"), dtype=np.uint8)
+    full["header_sha256"] = hashlib.sha256(_canonical(full)).hexdigest()
+    blob = np.frombuffer(json.dumps(full, indent=1).encode("utf-8"), dtype=np.uint8)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    _remove_stale_temporaries(path.parent, path.name)
+    tmp = path.parent / f".{path.name}.{os.getpid()}.{secrets.token_hex(8)}.tmp"
     try:
+        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
         with os.fdopen(fd, "wb") as fh:
             savez: Any = np.savez  # (numpy's stub types **kwds as its keyword options)
-            savez(fh, header=blob, **arrays)
+            savez(fh, header=blob, **members)
             fh.flush()
             os.fsync(fh.fileno())
+        os.chmod(tmp, _umask_mode())
         os.replace(tmp, path)
     except BaseException:
         with contextlib.suppress(OSError):
@@ -130,22 +214,163 @@ def save_model(
     return path
 
 
-def _jsonable(v: Any) -> Any:
-    if isinstance(v, dict):
-        return {str(k): _jsonable(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple)):
-        return [_jsonable(x) for x in v]
-    if isinstance(v, np.generic):
-        return v.item()
-    if isinstance(v, Path):
-        return str(v)
-    return v
+def save_model(model: Any, path: str | PathLike[str], *, include_vectors: bool = True) -> Path:
+    """``model.save(path, include_vectors=...)``; returns the path (kept for callers that
+    hold a model and a path)."""
+    model.save(path, include_vectors=include_vectors)
+    return Path(path)
 
 
-def read_header(path: str | PathLike[str]) -> dict[str, Any]:
-    """The JSON header of a model file (checks format and version only)."""
-    with _open(Path(path)) as npz:
-        return _header(npz, Path(path))
+# ---------------------------------------------------------------------------- reading
+
+
+def _fail(path: Path, why: str) -> ModelFileError:
+    return ModelFileError(f"{path}: {why}")
+
+
+def _npy_header(zf: zipfile.ZipFile, member: str, path: Path) -> tuple[tuple[int, ...], str, int]:
+    """(shape, dtype str, data offset) of a ``.npy`` member, read from its own header."""
+    with zf.open(member) as fh:
+        version = np.lib.format.read_magic(fh)
+        if version == (1, 0):
+            shape, fortran, dtype = np.lib.format.read_array_header_1_0(fh)
+        elif version == (2, 0):
+            shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
+        else:
+            raise _fail(path, f"damaged model file: {member} has .npy version {version}")
+        offset = fh.tell()
+    if fortran or dtype.hasobject:
+        raise _fail(path, f"damaged model file: {member} is not a plain C-order array")
+    return tuple(int(s) for s in shape), dtype.str, offset
+
+
+def _read_array(
+    zf: zipfile.ZipFile, name: str, spec: Mapping[str, Any], path: Path
+) -> NDArray[Any]:
+    member = name + ".npy"
+    try:
+        info = zf.getinfo(member)
+    except KeyError:
+        raise _fail(path, f"damaged model file: member {name!r} is missing") from None
+    shape, dtype, offset = _npy_header(zf, member, path)
+    if list(shape) != spec["shape"] or dtype != spec["dtype"]:
+        raise _fail(
+            path,
+            f"damaged model file: {name!r} has shape {shape} dtype {dtype}, header says "
+            f"{tuple(spec['shape'])} {spec['dtype']}",
+        )
+    size = math.prod(shape) * np.dtype(dtype).itemsize
+    if offset + size != info.file_size:
+        raise _fail(
+            path,
+            f"damaged model file: {name!r} holds {info.file_size - offset} "
+            f"bytes, its shape needs {size}",
+        )
+    with zf.open(member) as fh:
+        fh.seek(offset)
+        data = fh.read(size)
+    if len(data) != size:
+        raise _fail(path, f"damaged model file: {name!r} is cut short")
+    if hashlib.sha256(data).hexdigest() != spec["sha256"]:
+        raise _fail(path, f"damaged model file: checksum mismatch in {name!r}")
+    return np.frombuffer(data, dtype=dtype).reshape(shape).copy()
+
+
+def _is_int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _check_structure(header: Any, path: Path) -> dict[str, Any]:
+    """Types of every header field this module and the model rely on."""
+    if not isinstance(header, dict):
+        raise _fail(path, "not a visprim model file (header is not a JSON object)")
+    if header.get("format") != FORMAT:
+        raise _fail(
+            path, f"not a visprim model file (format {header.get('format')!r}, expected {FORMAT!r})"
+        )
+    version = header.get("format_version")
+    if version != FORMAT_VERSION:
+        from visprim import __version__
+
+        raise _fail(
+            path,
+            f"model file format version {version!r}; this visprim ({__version__}) reads "
+            f"version {FORMAT_VERSION} only - re-run `visprim learn`",
+        )
+
+    def bad(field: str, expected: str) -> ModelFileError:
+        return _fail(path, f"damaged model file: header field {field} is not {expected}")
+
+    if not isinstance(header.get("header_sha256"), str):
+        raise bad("header_sha256", "a string")
+    if hashlib.sha256(_canonical(header)).hexdigest() != header["header_sha256"]:
+        raise _fail(path, "damaged model file: checksum mismatch in the header")
+    if not isinstance(header.get("parameters"), dict):
+        raise bad("parameters", "an object")
+    fitted = header.get("fitted")
+    if not isinstance(fitted, dict):
+        raise bad("fitted", "an object")
+    checks = {
+        "inertia": (_is_number, "a number"),
+        "n_iter": (_is_int, "an integer"),
+        "seg2_threshold": (lambda v: v is None or _is_number(v), "a number or null"),
+        "n_training_segments": (_is_int, "an integer"),
+        "trial_names": (
+            lambda v: isinstance(v, list) and all(isinstance(x, str) for x in v),
+            "a list of strings",
+        ),
+        "training_source": (lambda v: isinstance(v, dict), "an object"),
+    }
+    for key, (ok, expected) in checks.items():
+        if key not in fitted or not ok(fitted[key]):
+            raise bad(f"fitted.{key}", expected)
+    if not isinstance(header.get("error_tables"), (dict, type(None))):
+        raise bad("error_tables", "an object or null")
+    specs = header.get("arrays")
+    if not isinstance(specs, dict):
+        raise bad("arrays", "an object")
+    for name in REQUIRED_ARRAYS:
+        if name not in specs:
+            raise _fail(path, f"damaged model file: header lists no {name!r}")
+    for name, spec in specs.items():
+        if name not in REQUIRED_ARRAYS and name not in OPTIONAL_ARRAYS:
+            raise _fail(path, f"damaged model file: unknown array {name!r}")
+        if (
+            not isinstance(spec, dict)
+            or not isinstance(spec.get("shape"), list)
+            or not all(_is_int(s) and s >= 0 for s in spec["shape"])
+            or len(spec["shape"]) > 2
+            or not isinstance(spec.get("dtype"), str)
+            or spec["dtype"] not in _DTYPES
+            or not isinstance(spec.get("sha256"), str)
+        ):
+            raise bad(f"arrays.{name}", "{shape: [int, ...], dtype: '<f8'|'<i8', sha256: str}")
+    return header
+
+
+def _read_header(zf: zipfile.ZipFile, path: Path) -> dict[str, Any]:
+    try:
+        info = zf.getinfo("header.npy")
+    except KeyError:
+        raise _fail(path, "damaged model file: member 'header' is missing") from None
+    if info.file_size > MAX_HEADER_BYTES:
+        raise _fail(path, f"damaged model file: the header is {info.file_size} bytes")
+    shape, dtype, offset = _npy_header(zf, "header.npy", path)
+    if len(shape) != 1 or dtype not in ("|u1", "<u1") or offset + shape[0] != info.file_size:
+        raise _fail(path, "damaged model file: the header is not a byte array")
+    with zf.open("header.npy") as fh:
+        fh.seek(offset)
+        raw = fh.read(shape[0])
+    try:
+        header = json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        why = "nested too deeply" if isinstance(exc, RecursionError) else str(exc)
+        raise _fail(path, f"damaged model file: unreadable header ({why})") from None
+    return _check_structure(header, path)
 
 
 @contextlib.contextmanager
@@ -153,58 +378,38 @@ def _open(path: Path):  # type: ignore[no-untyped-def]
     if not path.exists():
         raise FileNotFoundError(f"model file {path} does not exist")
     try:
-        npz = np.load(path, allow_pickle=False)
-    except (zipfile.BadZipFile, ValueError, OSError, EOFError) as exc:
-        raise ModelFileError(
-            f"{path}: not a visprim model file or damaged (cannot open the archive: {exc})"
+        zf = zipfile.ZipFile(path)
+    except (zipfile.BadZipFile, OSError, EOFError, ValueError) as exc:
+        raise _fail(
+            path, f"not a visprim model file or damaged (cannot open the archive: {exc})"
         ) from None
-    if not isinstance(npz, np.lib.npyio.NpzFile):
-        raise ModelFileError(f"{path}: not a visprim model file (a bare .npy array, not .npz)")
     try:
-        yield npz
+        yield zf
+    except (
+        zipfile.BadZipFile,
+        zlib.error,
+        NotImplementedError,
+        OSError,
+        EOFError,
+        ValueError,
+        KeyError,
+    ) as exc:
+        if isinstance(exc, ModelFileError):
+            raise
+        raise _fail(path, f"damaged model file ({type(exc).__name__}: {exc})") from None
     finally:
-        npz.close()
+        zf.close()
 
 
-def _member(npz: Any, name: str, path: Path) -> NDArray[Any]:
-    if name not in npz.files:
-        raise ModelFileError(f"{path}: damaged model file: member {name!r} is missing")
-    try:
-        return np.asarray(npz[name])
-    except (zipfile.BadZipFile, ValueError, OSError, EOFError, KeyError) as exc:
-        raise ModelFileError(f"{path}: damaged model file: cannot read {name!r} ({exc})") from None
+def read_header(path: str | PathLike[str]) -> dict[str, Any]:
+    """The checked JSON header of a model file (arrays are not read)."""
+    path = Path(path)
+    with _open(path) as zf:
+        return _read_header(zf, path)
 
 
-def _header(npz: Any, path: Path) -> dict[str, Any]:
-    raw = _member(npz, "header", path)
-    try:
-        header = json.loads(raw.astype(np.uint8).tobytes().decode("utf-8"))
-    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ModelFileError(f"{path}: damaged model file: unreadable header ({exc})") from None
-    if not isinstance(header, dict) or header.get("format") != FORMAT:
-        raise ModelFileError(
-            f"{path}: not a visprim model file (format {header.get('format')!r}, "
-            f"expected {FORMAT!r})"
-            if isinstance(header, dict)
-            else f"{path}: not a visprim model file (header is not a JSON object)"
-        )
-    version = header.get("format_version")
-    if version != FORMAT_VERSION:
-        raise ModelFileError(
-            f"{path}: model file format version {version!r}; this visprim "
-            f"({_visprim_version()}) reads version {FORMAT_VERSION} only - re-run `visprim learn`"
-        )
-    return header
-
-
-def _visprim_version() -> str:
-    import visprim
-
-    return visprim.__version__
-
-
-def load_model(path: str | PathLike[str]) -> PrimitiveModel:
-    """Read a model written by :func:`save_model` (see the module docstring).
+def load_model(path: str | PathLike[str]) -> ModelFileContents:
+    """Read and check a model file (see the module docstring): header and arrays.
 
     Raises
     ------
@@ -213,80 +418,38 @@ def load_model(path: str | PathLike[str]) -> PrimitiveModel:
     ModelFileError
         Another format or format version, or a damaged file.
     """
-    from visprim.errors import ErrorTables
-    from visprim.features import n_channels
-    from visprim.model import PrimitiveModel
-
     path = Path(path)
-    with _open(path) as npz:
-        header = _header(npz, path)
-        try:
-            specs = dict(header["arrays"])
-            params = dict(header["parameters"])
-            fitted = dict(header["fitted"])
-        except (KeyError, TypeError, ValueError) as exc:
-            raise ModelFileError(f"{path}: damaged model file: header lacks {exc}") from None
-        arrays: dict[str, NDArray[Any]] = {}
-        for name in (*_REQUIRED, "training_vectors"):
-            if name not in specs:
-                if name == "training_vectors":
-                    continue
-                raise ModelFileError(f"{path}: damaged model file: header lists no {name!r}")
-            a = _member(npz, name, path)
-            spec = specs[name]
-            if list(a.shape) != list(spec.get("shape", [])) or a.dtype.str != spec.get("dtype"):
-                raise ModelFileError(
-                    f"{path}: damaged model file: {name!r} has shape {a.shape} dtype "
-                    f"{a.dtype.str}, header says {spec.get('shape')} {spec.get('dtype')}"
-                )
-            if _digest(a) != spec.get("sha256"):
-                raise ModelFileError(f"{path}: damaged model file: checksum mismatch in {name!r}")
-            arrays[name] = a
-    # Files from before the bone-direction features were learned with the paper's method.
-    params.setdefault("features", "zyz")
-    params.setdefault("seg2_tuning", "repetitions")
-    params.setdefault("seg1_adaptive", False)
-    arms = fitted.get("arms", ["right"])
-    if not isinstance(arms, list) or not arms or any(a not in ("right", "left") for a in arms):
-        raise ModelFileError(f"{path}: damaged model file: arms {arms!r} are not arm names")
-    try:
-        model = PrimitiveModel(**params)
-        channels = n_channels(str(params["features"]), len(arms))
-    except (TypeError, ValueError) as exc:
-        raise ModelFileError(f"{path}: model parameters not understood: {exc}") from None
-    d, k, n = arrays["mean"].shape[0], arrays["cluster_centers"].shape[0], arrays["labels"].shape[0]
-    f = arrays["cluster_centers"].shape[1] if arrays["cluster_centers"].ndim == 2 else -1
+    with _open(path) as zf:
+        header = _read_header(zf, path)
+        specs = header["arrays"]
+        arrays = {name: _read_array(zf, name, spec, path) for name, spec in specs.items()}
+    check_shapes(path, arrays)
+    return ModelFileContents(path=path, header=header, arrays=arrays)
+
+
+def check_shapes(path: Path, arrays: Mapping[str, NDArray[Any]]) -> None:
+    """The arrays agree with each other: d from ``mean``, k and f from ``cluster_centers``,
+    N from ``labels``; labels index the centres. (Whether d and f fit the parameters is the
+    model's to check.)"""
+    mean, centres, labels = arrays["mean"], arrays["cluster_centers"], arrays["labels"]
+    if mean.ndim != 1 or centres.ndim != 2 or labels.ndim != 1:
+        raise _fail(path, "damaged model file: array shapes are inconsistent")
+    d, k, n = mean.shape[0], centres.shape[0], labels.shape[0]
+    vectors = arrays.get("training_vectors")
     consistent = (
         arrays["eigenvalues"].shape == (d,)
         and arrays["eigenvectors"].shape == (d, d)
-        and d == channels * int(params.get("n_samples", -1))
-        and f == int(params.get("n_components", -2))
+        and centres.shape[1] <= d
         and arrays["primitive_durations"].shape == (k,)
         and all(
             arrays[a].shape == (n,) for a in ("segment_trial", "segment_starts", "segment_ends")
         )
+        and (vectors is None or vectors.shape == (n, d))
+        and (n == 0 or (labels.min() >= 0 and labels.max() < k))
+        and (n == 0 or arrays["segment_trial"].min() >= 0)
     )
     if not consistent:
-        raise ModelFileError(f"{path}: damaged model file: array shapes are inconsistent")
-    model.mean_ = arrays["mean"]
-    model.eigenvalues_ = arrays["eigenvalues"]
-    model.eigenvectors_ = arrays["eigenvectors"]
-    model.cluster_centers_ = arrays["cluster_centers"]
-    model.labels_ = arrays["labels"]
-    model.segment_trial_ = arrays["segment_trial"]
-    model.segment_starts_ = arrays["segment_starts"]
-    model.segment_ends_ = arrays["segment_ends"]
-    model.primitive_durations_ = arrays["primitive_durations"]
-    model.training_vectors_ = arrays.get("training_vectors")
-    model.training_projections_ = None
-    model.inertia_ = float(fitted.get("inertia", float("nan")))
-    model.n_iter_ = int(fitted.get("n_iter", 0))
-    thr = fitted.get("seg2_threshold")
-    model.seg2_threshold_ = None if thr is None else float(thr)
-    model.n_training_segments_ = int(fitted.get("n_training_segments") or n)
-    model.arms_ = tuple(arms)
-    model.trial_names_ = list(fitted.get("trial_names", []))
-    model.training_source_ = dict(fitted.get("training_source") or {})
-    tables = header.get("error_tables")
-    model.error_tables_ = ErrorTables.from_dict(tables) if tables else None
-    return model
+        raise _fail(path, "damaged model file: array shapes are inconsistent")
+    for name in ("mean", "eigenvalues", "eigenvectors", "cluster_centers"):
+        if not np.all(np.isfinite(arrays[name])):
+            raise _fail(path, f"damaged model file: {name!r} holds NaN or infinity")

@@ -29,6 +29,7 @@ bad arguments raise ``ValueError`` naming the argument.
 
 from __future__ import annotations
 
+import fnmatch
 import glob
 import os
 import re
@@ -52,8 +53,8 @@ from visprim.io.errors import (
 )
 from visprim.io.gaps import check_gap_options
 from visprim.io.presets import MARKER_PRESETS, RIG_PRESETS, check_arm
-from visprim.io.resample import resample_trial
-from visprim.trial import Trial
+from visprim.io.resample import check_resample_period, resample_trial
+from visprim.trial import Trial, TrialError
 
 __all__ = [
     "FORMATS",
@@ -207,6 +208,8 @@ def read_pieces(
         raise ValueError(f"markers='file' applies to C3D files, not {p.name}")
     if repetitions is not None and int(repetitions) < 1:
         raise ValueError(f"repetitions must be >= 1, got {repetitions!r}")
+    if resample is not None:
+        check_resample_period(resample)
 
     if fmt == "csv":
         trials = [_read_csv(p, arm, repetitions)]
@@ -258,8 +261,8 @@ def read_pieces(
                 "piece": [i + 1, len(recs)],
             }
             arm_recs = [side[i] for side in per_side]
-            trials.append(
-                Trial(
+            try:
+                trial = Trial(
                     times=rec.times,
                     markers=np.concatenate([r.markers(markers) for r in arm_recs], axis=1),
                     joints=np.concatenate([r.joints for r in arm_recs], axis=1),
@@ -272,10 +275,22 @@ def read_pieces(
                     meta=meta,
                     arms=("right", "left") if arm == "both" else ("right",),
                 )
-            )
+            except TrialError as exc:
+                raise MalformedFileError(
+                    p, f"the arm's points are degenerate ({_without_path(str(exc), p)})"
+                ) from None
+            trials.append(trial)
     if resample is not None:
-        trials = [resample_trial(t, resample) for t in trials]
+        try:
+            trials = [resample_trial(t, resample) for t in trials]
+        except (TrialError, ValueError) as exc:
+            raise ReadError(p, _without_path(str(exc), p)) from None
     return trials
+
+
+def _without_path(message: str, p: Path) -> str:
+    """``message`` without a leading ``"<path>: "`` (ReadError adds the path itself)."""
+    return message[len(str(p)) :].lstrip(":, ") if message.startswith(str(p)) else message
 
 
 def read(
@@ -330,6 +345,51 @@ def read(
     return trials[0]
 
 
+def _walk_files(root: Path) -> list[Path]:
+    """Files under ``root``, subfolders included; symbolic links to folders are followed
+    once each (a link back to a parent is not walked again)."""
+    found: list[Path] = []
+    seen: set[tuple[int, int]] = set()
+    stack = [root]
+    while stack:
+        folder = stack.pop()
+        try:
+            st = folder.stat()
+            key = (st.st_dev, st.st_ino)
+            if key in seen:
+                continue
+            seen.add(key)
+            entries = list(os.scandir(folder))
+        except OSError:
+            continue  # unreadable or dangling: nothing to read there
+        for entry in entries:
+            try:
+                if entry.is_dir():
+                    stack.append(Path(entry.path))
+                elif entry.is_file():
+                    found.append(Path(entry.path))
+            except OSError:
+                continue
+    return found
+
+
+def _glob(pattern: str, recursive: bool) -> list[Path]:
+    """:func:`glob.glob`, but ``**`` walks folders with :func:`_walk_files` (safe against
+    symbolic-link loops, which make ``glob`` recurse without end)."""
+    if not (recursive and "**" in pattern):
+        return [Path(h) for h in glob.glob(pattern)]
+    parts = Path(pattern).parts
+    k = next(i for i, part in enumerate(parts) if any(ch in part for ch in "*?["))
+    root = Path(*parts[:k]) if k else Path(".")
+    flat = pattern.replace("**" + os.sep, "")
+    hits = []
+    for f in _walk_files(root):
+        name = str(f) if k else os.path.relpath(f)
+        if fnmatch.fnmatchcase(name, pattern) or fnmatch.fnmatchcase(name, flat):
+            hits.append(f)
+    return hits
+
+
 def _expand(
     sources: str | os.PathLike[str] | Iterable[str | os.PathLike[str]], recursive: bool
 ) -> list[Path]:
@@ -338,8 +398,8 @@ def _expand(
     for item in items:
         p = Path(item)
         if p.is_dir():
-            walk = p.rglob("*") if recursive else p.iterdir()
-            found = sorted(f for f in walk if f.is_file() and f.suffix.lower() in FORMATS)
+            walk = _walk_files(p) if recursive else [f for f in p.iterdir() if f.is_file()]
+            found = sorted(f for f in walk if f.suffix.lower() in FORMATS)
             if not found:
                 raise ReadError(
                     p,
@@ -350,7 +410,7 @@ def _expand(
         elif p.exists():
             out.append(p)
         elif any(ch in str(item) for ch in "*?["):
-            hits = sorted(Path(h) for h in glob.glob(str(item), recursive=recursive))
+            hits = sorted(_glob(str(item), recursive))
             files = [h for h in hits if h.is_file() and h.suffix.lower() in FORMATS]
             if not files:
                 raise ReadError(str(item), "the pattern matches no recording")
@@ -385,25 +445,83 @@ def read_many(
     and ``rate`` for AMC, ``units`` for BVH, ``mapping``, ``preset``, ``up_axis`` and
     ``mirror`` for the motion-capture formats, not the marker CSV) are only passed to files of
     those formats.
-    ``on_error="warn"`` skips unreadable files with a warning instead of raising.
+    ``on_error="warn"`` skips unreadable files (other formats named explicitly included)
+    with a warning instead of raising; every problem of a file is a :class:`ReadError`, so
+    nothing else escapes. Bad arguments (an unknown preset, ``resample=1e-9``) raise
+    ``ValueError`` before any file is read, whatever ``on_error``. Folders and ``**``
+    patterns follow symbolic links to folders once each (link loops are not walked again).
     """
     if on_error not in ("raise", "warn"):
         raise ValueError(f"on_error must be 'raise' or 'warn', got {on_error!r}")
+    unknown = set(options) - set(_READ_OPTIONS)
+    if unknown:
+        raise TypeError(f"read_many() got unexpected option(s) {', '.join(sorted(unknown))}")
+    arm = check_arm(arm)
+    _check_options(options)
     trials: list[Trial] = []
     for path in _expand(sources, recursive):
-        fmt = FORMATS[path.suffix.lower()]
-        opts = {
-            k: v
-            for k, v in options.items()
-            if k not in _FORMAT_OPTIONS or fmt in _FORMAT_OPTIONS[k]
-        }
         try:
+            fmt = _format_of(path)
+            opts = {
+                k: v
+                for k, v in options.items()
+                if k not in _FORMAT_OPTIONS or fmt in _FORMAT_OPTIONS[k]
+            }
             trials.extend(read_pieces(path, arm, **opts))
         except ReadError as exc:
             if on_error == "raise":
                 raise
             warnings.warn(f"skipped: {exc}", stacklevel=2)
+        except (ValueError, ArithmeticError, LookupError, TypeError) as exc:
+            # Data that got past a reader's checks (a reader bug): still one file's problem.
+            err = ReadError(path, f"unexpected {type(exc).__name__}: {exc}")
+            if on_error == "raise":
+                raise err from exc
+            warnings.warn(f"skipped: {err}", stacklevel=2)
     return trials
+
+
+#: Keyword options of :func:`read_pieces` (and so of :func:`read_many`).
+_READ_OPTIONS = (
+    "skeleton",
+    "rate",
+    "mapping",
+    "preset",
+    "up_axis",
+    "units",
+    "markers",
+    "max_gap",
+    "on_gap",
+    "gap_method",
+    "min_duration",
+    "resample",
+    "repetitions",
+    "mirror",
+)
+
+
+def _check_options(options: Mapping[str, Any]) -> None:
+    """Argument checks that do not depend on the file (ValueError naming the argument)."""
+    check_gap_options(
+        options.get("max_gap", 0.2),
+        options.get("on_gap", "split"),
+        options.get("gap_method", "cubic"),
+    )
+    if options.get("up_axis") is not None:
+        check_up_axis(options["up_axis"])
+    if options.get("markers", "virtual") not in ("virtual", "file"):
+        raise ValueError(f"markers must be 'virtual' or 'file', got {options['markers']!r}")
+    preset = options.get("preset")
+    if preset is not None and preset not in RIG_PRESETS and preset not in MARKER_PRESETS:
+        raise ValueError(
+            f"unknown preset {preset!r}; rig presets: {', '.join(RIG_PRESETS)}; marker "
+            f"presets: {', '.join(MARKER_PRESETS)}"
+        )
+    if options.get("resample") is not None:
+        check_resample_period(options["resample"])
+    reps = options.get("repetitions")
+    if reps is not None and int(reps) < 1:
+        raise ValueError(f"repetitions must be >= 1, got {reps!r}")
 
 
 def _read_arm(p: Path, fmt: str, arm: str, **kw: Any) -> list[ArmRecording]:
@@ -458,7 +576,7 @@ def _read_csv(p: Path, arm: str, repetitions: int | None) -> Trial:
     if arm != "right":
         raise ValueError(f"{p}: the marker CSV holds one (right) arm; arm={arm!r} is not available")
     try:
-        from visprim.markers_csv import read_marker_csv
+        from visprim.io.markers_csv import read_marker_csv
     except ImportError as exc:  # pragma: no cover - the module ships with visprim
         raise ReadError(p, f"marker CSV support is unavailable ({exc})") from None
     try:
@@ -466,7 +584,4 @@ def _read_csv(p: Path, arm: str, repetitions: int | None) -> Trial:
     except ReadError:
         raise
     except ValueError as exc:  # MarkerCSVError: "<path>: ..." or "<path>, line N: ..."
-        msg = str(exc)
-        if msg.startswith(str(p)):
-            msg = msg[len(str(p)) :].lstrip(":, ")
-        raise MalformedFileError(p, msg) from exc
+        raise MalformedFileError(p, _without_path(str(exc), p)) from exc

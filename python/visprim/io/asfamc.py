@@ -21,6 +21,7 @@ Conventions (Acclaim format as written by Vicon BodyBuilder for the CMU database
 
 from __future__ import annotations
 
+import math
 import os
 import re
 from collections.abc import Mapping, Sequence
@@ -33,9 +34,12 @@ from numpy.typing import NDArray
 
 from visprim.io.assemble import (
     FINGER_RATIO,
+    MAX_FRAME_PERIOD,
+    MIN_FRAME_PERIOD,
     ArmRecording,
     check_up_axis,
     extend_hand,
+    period_problem,
     torso_frame,
     up_rotation,
 )
@@ -48,6 +52,7 @@ from visprim.io.errors import (
 )
 from visprim.io.rotations import euler_matrix
 from visprim.io.skeleton import resolve_rig
+from visprim.io.text import read_text
 
 _DOFS = ("rx", "ry", "rz", "tx", "ty", "tz", "l")
 DEFAULT_AMC_RATE = 120.0
@@ -106,18 +111,8 @@ class AsfSkeleton:
         return chain[::-1]
 
 
-def _read_text(path: str) -> list[str]:
-    try:
-        text = Path(path).read_text(encoding="utf-8-sig", errors="strict")
-    except UnicodeDecodeError as exc:
-        raise MalformedFileError(
-            path, f"not a text file ({exc.reason} at byte {exc.start})"
-        ) from None
-    except OSError as exc:
-        raise ReadError(path, f"cannot read: {exc.strerror or exc}") from None
-    if not text.strip():
-        raise TruncatedFileError(path, "the file is empty")
-    return text.splitlines()
+def _read_lines(path: str) -> list[str]:
+    return read_text(path)[0].splitlines()
 
 
 def _floats(path: str, line_no: int, tokens: Sequence[str], n: int, what: str) -> list[float]:
@@ -131,7 +126,7 @@ def _floats(path: str, line_no: int, tokens: Sequence[str], n: int, what: str) -
         raise MalformedFileError(
             path, f"line {line_no}: {what} needs {n} numbers, got {' '.join(tokens[:n])!r}"
         ) from None
-    if not all(np.isfinite(vals)):
+    if not all(math.isfinite(v) for v in vals):
         raise MalformedFileError(path, f"line {line_no}: {what} is not finite")
     return vals
 
@@ -146,7 +141,7 @@ def parse_asf(path: str | os.PathLike[str]) -> AsfSkeleton:
         entry naming an undefined bone, a bone without a parent).
     """
     path = os.fspath(path)
-    lines = _read_text(path)
+    lines = _read_lines(path)
     section = None
     name = ""
     length_unit = 1.0
@@ -255,21 +250,23 @@ def parse_asf(path: str | os.PathLike[str]) -> AsfSkeleton:
             dof=tuple(t for t in root_order),
         )
     ]
+    names_seen = {"root"}
     for blk in raw_bones:
         at = blk["line"]
         for attr in ("name", "direction", "length"):
             if attr not in blk:
                 raise MalformedFileError(path, f"line {at}: bone block without {attr!r}")
         d = np.array(blk["direction"], dtype=float)
-        norm = float(np.linalg.norm(d))
+        norm = math.hypot(*blk["direction"])
         length = float(blk["length"])
         bname = str(blk["name"])
         if length < 0:
             raise MalformedFileError(path, f"line {at}: bone {bname} has negative length")
         if norm == 0.0 and length > 0:
             raise MalformedFileError(path, f"line {at}: bone {bname} has a zero direction")
-        if any(x.name == bname for x in bones):
+        if bname in names_seen:
             raise MalformedFileError(path, f"line {at}: bone name {bname!r} is repeated")
+        names_seen.add(bname)
         bones.append(
             AsfBone(
                 name=bname,
@@ -331,6 +328,71 @@ class AmcMotion:
     first_frame: int
 
 
+def _parse_amc_regular(path: str, lines: list[str], dof_count: dict[str, int]) -> AmcMotion | None:
+    """The common case in a few array operations: every frame lists the same bones in the
+    same order, no comment in the body. ``None`` for anything else (or anything wrong): the
+    line-by-line parser then reads the file and names the line at fault."""
+    header = 0
+    angle_unit = None
+    for line in lines:
+        text = line.strip()
+        if text.isdigit():
+            break
+        if text.startswith(":"):
+            word = text[1:].split()[0].upper() if len(text) > 1 else ""
+            angle_unit = {"DEGREES": "deg", "RADIANS": "rad"}.get(word, angle_unit)
+        elif text and not text.startswith("#"):
+            return None
+        header += 1
+    body = lines[header:]
+    if not body:
+        return None
+    layout: list[tuple[str, int]] = []
+    for line in body[1:]:
+        toks = line.split()
+        if not toks or toks[0].isdigit():
+            break
+        layout.append((toks[0], len(toks) - 1))
+    if sorted(layout) != sorted(dof_count.items()):
+        return None
+    width = 1 + sum(1 + k for _, k in layout)
+    tokens = np.array(" ".join(body).split(), dtype=object)
+    if tokens.size == 0 or tokens.size % width:
+        return None
+    table = tokens.reshape(-1, width)
+    name_cols, value_cols = [], []
+    col = 1
+    for _, k in layout:
+        name_cols.append(col)
+        value_cols.append(np.arange(col + 1, col + 1 + k))
+        col += 1 + k
+    names = np.array([name for name, _ in layout])
+    if np.any(table[:, name_cols] != names):
+        return None
+    cols = np.concatenate(value_cols)
+    try:
+        frames = np.fromiter(map(int, table[:, 0]), np.int64, count=table.shape[0])
+        numbers = np.fromiter(
+            map(float, table[:, cols].ravel()), np.float64, count=table.shape[0] * cols.size
+        )
+    except ValueError:
+        return None
+    numbers = numbers.reshape(table.shape[0], cols.size)
+    if np.any(np.diff(frames) != 1) or not np.all(np.isfinite(numbers)):
+        return None
+    values, start = {}, 0
+    for name, k in layout:
+        values[name] = np.ascontiguousarray(numbers[:, start : start + k])
+        start += k
+    return AmcMotion(
+        path=path,
+        n_frames=int(frames.size),
+        values=values,
+        angle_unit=angle_unit,
+        first_frame=int(frames[0]),
+    )
+
+
 def parse_amc(path: str | os.PathLike[str], skeleton: AsfSkeleton) -> AmcMotion:
     """Parse an AMC file against ``skeleton`` (bone names and dof counts are checked).
 
@@ -342,9 +404,12 @@ def parse_amc(path: str | os.PathLike[str], skeleton: AsfSkeleton) -> AmcMotion:
         frame missing bones means the file was cut short).
     """
     path = os.fspath(path)
-    lines = _read_text(path)
-    angle_unit = None
+    lines = _read_lines(path)
     dof_count = {b.name: len(b.dof) for b in skeleton.bones if b.dof}
+    fast = _parse_amc_regular(path, lines, dof_count)
+    if fast is not None:
+        return fast
+    angle_unit = None
     rows: dict[str, list[list[str]]] = {name: [] for name in dof_count}
     row_lines: dict[str, list[int]] = {name: [] for name in dof_count}
     frame_numbers: list[int] = []
@@ -542,8 +607,12 @@ def read_amc_arm(
     if motion.n_frames < 2:
         raise ReadError(path, f"a trial needs at least 2 frames, the file has {motion.n_frames}")
     hz = DEFAULT_AMC_RATE if rate is None else float(rate)
-    if not np.isfinite(hz) or hz <= 0:
-        raise ValueError(f"rate must be a positive number of Hz, got {rate!r}")
+    problem = period_problem(1.0 / hz) if np.isfinite(hz) and hz > 0 else "not positive"
+    if problem is not None:
+        raise ValueError(
+            f"rate must be a number of frames per second with a period of "
+            f"{MIN_FRAME_PERIOD:g}–{MAX_FRAME_PERIOD:g} s, got {rate!r}"
+        )
     try:
         roles = resolve_rig(path, skel.names, arm, preset, mapping, kind="bone")
     except MissingPointError as exc:

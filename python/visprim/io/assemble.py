@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from visprim.io.errors import MalformedFileError
 from visprim.io.rotations import axis_rotation, nearest_rotation
 
 #: Finger point of rigs without a finger joint: wrist + FINGER_RATIO × forearm length along
@@ -33,6 +34,34 @@ from visprim.io.rotations import axis_rotation, nearest_rotation
 FINGER_RATIO = 0.45
 
 UP_AXES: tuple[str, ...] = ("+x", "-x", "+y", "-y", "+z", "-z")
+
+#: Frame periods (seconds) a recording may have: 10 µs (100 kHz) to 10 s (0.1 Hz). Anything
+#: outside is a damaged header or a unit mistake (milliseconds given as seconds).
+MIN_FRAME_PERIOD = 1e-5
+MAX_FRAME_PERIOD = 10.0
+#: Most frames a resampled trial may have (about 2.8 h at 1 kHz): refused before allocating.
+MAX_FRAMES = 10_000_000
+
+
+def period_problem(period: float) -> str | None:
+    """Why ``period`` (seconds) is not a plausible frame period, or None if it is."""
+    if not np.isfinite(period) or period <= 0:
+        return f"{period!r} s is not a positive number of seconds"
+    if not MIN_FRAME_PERIOD <= period <= MAX_FRAME_PERIOD:
+        return (
+            f"{period:g} s is outside {MIN_FRAME_PERIOD:g}–{MAX_FRAME_PERIOD:g} s "
+            f"(rates of {1 / MAX_FRAME_PERIOD:g} Hz to {1 / MIN_FRAME_PERIOD:g} Hz)"
+        )
+    return None
+
+
+def check_frame_period(path: str, period: float, what: str) -> float:
+    """``period`` if plausible, else a :class:`MalformedFileError` naming ``what`` (the
+    field of the file that gave it)."""
+    problem = period_problem(float(period))
+    if problem is not None:
+        raise MalformedFileError(path, f"{what} gives a frame period of {problem}")
+    return float(period)
 
 
 def check_up_axis(up: str, argument: str = "up_axis") -> str:

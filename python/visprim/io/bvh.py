@@ -22,6 +22,7 @@ of values, fewer or more rows than ``Frames:``, NaN/inf values) raise a
 
 from __future__ import annotations
 
+import math
 import os
 import re
 from collections.abc import Mapping, Sequence
@@ -36,12 +37,14 @@ from visprim.io.assemble import (
     ArmRecording,
     check_up_axis,
     extend_hand,
+    period_problem,
     torso_frame,
     up_rotation,
 )
 from visprim.io.errors import FrameCountError, MalformedFileError, ReadError, TruncatedFileError
 from visprim.io.rotations import axis_rotation
 from visprim.io.skeleton import resolve_rig
+from visprim.io.text import read_text
 
 _CHANNELS = {
     "xposition": ("pos", 0),
@@ -103,6 +106,9 @@ class BvhData:
         return chain[::-1]
 
 
+_TOKEN = re.compile(r"[{}]|[^\s{}]+")
+
+
 class _Tokens:
     """Whitespace tokens of the HIERARCHY section, with line numbers for error messages."""
 
@@ -110,9 +116,8 @@ class _Tokens:
         self.path = path
         self.items: list[tuple[str, int]] = []
         for number, line in enumerate(lines, start=1):
-            # Braces may touch names ("Hips{"); split them off.
-            for tok in re.sub(r"([{}])", r" \1 ", line).split():
-                self.items.append((tok, number))
+            # Braces may touch names ("Hips{"): they are tokens of their own.
+            self.items.extend((tok, number) for tok in _TOKEN.findall(line))
         self.pos = 0
         self.last_line = len(lines)
 
@@ -144,7 +149,7 @@ class _Tokens:
                 raise MalformedFileError(
                     self.path, f"line {line}: {what} needs {n} numbers, found {tok!r}"
                 ) from None
-            if not np.isfinite(v):
+            if not math.isfinite(v):
                 raise MalformedFileError(self.path, f"line {line}: {what} is not finite ({tok})")
             vals.append(v)
         return np.array(vals)
@@ -162,6 +167,7 @@ def _parse_hierarchy(path: str, lines: list[str]) -> list[BvhJoint]:
     end_parent = -1
     name, line = toks.next("the root's name")
     stack: list[int] = []
+    seen: set[str] = set()
     pending: tuple[str, int] | None = (name, -1)
     while True:
         if pending is not None:
@@ -169,8 +175,9 @@ def _parse_hierarchy(path: str, lines: list[str]) -> list[BvhJoint]:
             pending = None
             if name in {"{", "}"}:
                 raise MalformedFileError(path, f"line {line}: joint without a name")
-            if any(j.name == name for j in joints):
+            if name in seen:
                 raise MalformedFileError(path, f"line {line}: joint name {name!r} is repeated")
+            seen.add(name)
             toks.expect("{")
             joints.append(BvhJoint(name=name, parent=parent, offset=np.zeros(3)))
             stack.append(len(joints) - 1)
@@ -247,18 +254,9 @@ def parse_bvh(path: str | os.PathLike[str]) -> BvhData:
         With the file name and line number of the problem.
     """
     path = os.fspath(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8-sig", errors="strict")
-    except UnicodeDecodeError as exc:
-        raise MalformedFileError(
-            path, f"not a text file ({exc.reason} at byte {exc.start})"
-        ) from None
-    except OSError as exc:
-        raise ReadError(path, f"cannot read: {exc.strerror or exc}") from None
+    text, _ = read_text(path)
     lines = text.splitlines()
     motion_at = next((i for i, ln in enumerate(lines) if ln.strip().upper() == "MOTION"), None)
-    if not any(ln.strip() for ln in lines):
-        raise TruncatedFileError(path, "the file is empty")
     if motion_at is None:
         if lines and lines[0].strip() == "HIERARCHY":
             raise TruncatedFileError(path, "no MOTION section (file ends in the hierarchy)")
@@ -299,10 +297,9 @@ def parse_bvh(path: str | os.PathLike[str]) -> BvhData:
         frame_time = float(time_tok)
     except ValueError:
         frame_time = float("nan")
-    if not np.isfinite(frame_time) or frame_time <= 0:
-        raise MalformedFileError(
-            path, f"line {time_line}: 'Frame Time:' must be a positive number, found {time_tok!r}"
-        )
+    problem = period_problem(frame_time)
+    if problem is not None:
+        raise MalformedFileError(path, f"line {time_line}: 'Frame Time:' {problem}")
 
     rows: list[list[str]] = []
     row_lines: list[int] = []

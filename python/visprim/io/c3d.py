@@ -1,4 +1,6 @@
-"""C3D marker files (read with ezc3d): arm landmarks → joint centres → arm trials.
+"""C3D marker files: arm landmarks → joint centres → arm trials.
+
+The file is decoded by :mod:`visprim.io.c3d_format` (checked, pure numpy).
 
 * Units from ``POINT:UNITS`` (m, cm, mm); rate from ``POINT:RATE``; analog channels (EMG,
   force plates) are ignored (their count and rate go to ``meta``).
@@ -32,9 +34,7 @@
 from __future__ import annotations
 
 import os
-import struct
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -43,12 +43,14 @@ from numpy.typing import NDArray
 from visprim.io.assemble import (
     FINGER_RATIO,
     ArmRecording,
+    check_frame_period,
     check_up_axis,
     extend_hand,
     torso_frame,
     up_rotation,
 )
-from visprim.io.errors import MalformedFileError, MissingPointError, ReadError, TruncatedFileError
+from visprim.io.c3d_format import read_c3d
+from visprim.io.errors import MalformedFileError, MissingPointError, ReadError
 from visprim.io.gaps import fill_and_split
 from visprim.io.presets import (
     MARKER_PRESETS,
@@ -71,53 +73,6 @@ PRESET_DEFAULT_UP: dict[str, tuple[str, str]] = {
 _UNITS = {"m": 1.0, "cm": 0.01, "mm": 0.001}
 _CLUSTER_ROLES = frozenset({"lateral_right", "lateral_left", "upper_arm", "forearm", "finger"})
 _TORSO_ROLES = ("up_low", "up_high", "back", "front", "lateral_right", "lateral_left")
-
-
-def _raw_header_frames(path: str) -> int | None:
-    """Frame count from the file's own 512-byte header (None if not stored there)."""
-    with open(path, "rb") as fh:
-        head = fh.read(512)
-        if len(head) < 512:
-            return None
-        param_block = head[0]
-        fh.seek(max(param_block - 1, 0) * 512 + 3)
-        proc = fh.read(1)
-    endian = ">" if proc and proc[0] == 86 else "<"
-    first, last = struct.unpack(endian + "HH", head[6:10])
-    if last == 65535 or last < first:
-        return None
-    return last - first + 1
-
-
-def _load(path: str) -> Any:
-    import ezc3d
-
-    size = Path(path).stat().st_size if Path(path).exists() else -1
-    if size < 0:
-        raise ReadError(path, "no such file")
-    if size == 0:
-        raise TruncatedFileError(path, "the file is empty")
-    try:
-        c3d = ezc3d.c3d(path)
-    except (OSError, RuntimeError, ValueError) as exc:
-        msg = str(exc).split(":")[0].strip() or type(exc).__name__
-        if size < 512:
-            raise TruncatedFileError(path, f"cut short ({size} bytes; ezc3d: {msg})") from None
-        raise MalformedFileError(path, f"not a readable C3D file (ezc3d: {msg})") from None
-    declared = _raw_header_frames(path)
-    got = int(c3d["data"]["points"].shape[2])
-    if declared is not None and got < declared:
-        raise TruncatedFileError(
-            path, f"the header declares {declared} frames but the file holds only {got}"
-        )
-    return c3d
-
-
-def _param(c3d: Any, group: str, name: str) -> Any:
-    try:
-        return c3d["parameters"][group][name]["value"]
-    except KeyError:
-        return None
 
 
 def _resolve(
@@ -269,29 +224,31 @@ def read_c3d_arm(
     for ``Trial.markers``.
     """
     path = os.fspath(path)
-    c3d = _load(path)
-    labels = [str(x) for x in (_param(c3d, "POINT", "LABELS") or [])]
-    pts = np.asarray(c3d["data"]["points"], dtype=np.float64)  # (4, N, T)
-    if pts.shape[1] != len(labels):
+    c3d = read_c3d(path)
+    pts = c3d.points  # (T, N, 3) file units, NaN where missing
+    n_frames, n_points = pts.shape[0], pts.shape[1]
+    labels = c3d.labels("POINT", n_points)
+    if len(labels) != n_points:
         raise MalformedFileError(
-            path, f"POINT:LABELS names {len(labels)} markers but the data has {pts.shape[1]}"
+            path, f"POINT:LABELS names {len(labels)} markers but the data has {n_points}"
         )
-    n_frames = pts.shape[2]
     if n_frames < 2:
         raise ReadError(path, f"a trial needs at least 2 frames, the file has {n_frames}")
-    rate = float(
-        np.ravel(_param(c3d, "POINT", "RATE") or [c3d["header"]["points"]["frame_rate"]])[0]
+    rate_param = c3d.param("POINT", "RATE")
+    rate = (
+        float(np.ravel(rate_param)[0])
+        if rate_param is not None and not isinstance(rate_param, list) and np.size(rate_param)
+        else c3d.header_rate
     )
-    if not np.isfinite(rate) or rate <= 0:
-        raise MalformedFileError(path, f"POINT:RATE is {rate!r}, not a positive rate")
-    unit_raw = _param(c3d, "POINT", "UNITS")
-    unit = str(unit_raw[0]).strip().lower() if unit_raw is not None and len(unit_raw) else ""
+    check_frame_period(path, 1.0 / rate if rate > 0 else float("inf"), "POINT:RATE")
+    unit_raw = c3d.param("POINT", "UNITS")
+    unit = str(unit_raw[0]).strip().lower() if isinstance(unit_raw, list) and unit_raw else ""
     if unit not in _UNITS:
         raise MalformedFileError(
             path, f"POINT:UNITS is {unit!r}; expected one of {', '.join(_UNITS)}"
         )
     scale = _UNITS[unit]
-    xyz = np.transpose(pts[:3], (2, 1, 0)) * scale  # (T, N, 3) metres, file axes
+    xyz = pts * scale  # (T, N, 3) metres, file axes
 
     preset_name, roles, role_names = _resolve(path, labels, arm, preset, mapping)
     width = _biacromial_width(labels, xyz, role_names.get("acromion", []), arm)
@@ -312,8 +269,8 @@ def read_c3d_arm(
     if up_axis is not None:
         up, up_from = check_up_axis(up_axis), "argument"
     else:
-        screen = _param(c3d, "POINT", "Y_SCREEN")
-        s = str(screen[0]).strip().lower() if screen is not None and len(screen) else ""
+        screen = c3d.param("POINT", "Y_SCREEN")
+        s = str(screen[0]).strip().lower() if isinstance(screen, list) and screen else ""
         if s in {"+x", "-x", "+y", "-y", "+z", "-z"}:
             up, up_from = s, "POINT:Y_SCREEN"
         else:
@@ -346,8 +303,8 @@ def read_c3d_arm(
     # Subject prefix and fixed meta.
     used_labels = sorted({labels[i] for r in gap_roles for i in roles[r]})
     prefixes = sorted({lab.rsplit(":", 1)[0] for lab in used_labels if ":" in lab})
-    analog_labels = _param(c3d, "ANALOG", "LABELS")
-    analog_rate = _param(c3d, "ANALOG", "RATE")
+    analog_labels = c3d.param("ANALOG", "LABELS")
+    analog_rate = c3d.param("ANALOG", "RATE")
     meta_base: dict[str, Any] = {
         "format": "c3d",
         "rate_hz": rate,
@@ -362,7 +319,9 @@ def read_c3d_arm(
         "n_analog_channels": 0 if analog_labels is None else len(analog_labels),
         "analog_rate_hz": (
             float(np.ravel(analog_rate)[0])
-            if analog_rate is not None and np.size(analog_rate)
+            if analog_rate is not None
+            and not isinstance(analog_rate, list)
+            and np.size(analog_rate)
             else None
         ),
         "gaps": report.as_dict(),

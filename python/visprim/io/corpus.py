@@ -138,7 +138,8 @@ class Corpus(LazyCorpus):
         here, once: ``len`` is known without reading anything.
     arm : 'right' (default) or 'left'
     recursive : search subfolders of folders
-    on_error : 'raise' (default) or 'warn' — skip an unreadable file with a warning
+    on_error : 'raise' (default) or 'warn' — skip an unreadable file with a warning (as
+        :func:`~visprim.io.read_many`: reader errors and unexpected errors on a file's data)
     **options : those of :func:`visprim.io.read_pieces` (``resample``, ``rate``, ``mirror``,
         ...), passed only to the formats they apply to, as in :func:`~visprim.io.read_many`.
 
@@ -158,10 +159,15 @@ class Corpus(LazyCorpus):
         on_error: str = "raise",
         **options: Any,
     ) -> None:
-        from visprim.io import _expand
+        from visprim.io import _READ_OPTIONS, _check_options, _expand, check_arm
 
         if on_error not in ("raise", "warn"):
             raise ValueError(f"on_error must be 'raise' or 'warn', got {on_error!r}")
+        unknown = set(options) - set(_READ_OPTIONS)
+        if unknown:
+            raise TypeError(f"Corpus() got unexpected option(s) {', '.join(sorted(unknown))}")
+        arm = check_arm(arm)
+        _check_options(options)
         self.paths: list[Path] = _expand(sources, recursive)
         self.arm = arm
         self.on_error = on_error
@@ -180,22 +186,27 @@ class Corpus(LazyCorpus):
         return out
 
     def read_item(self, index: int) -> list[Trial]:
-        from visprim.io import _FORMAT_OPTIONS, FORMATS, ReadError, read_pieces
+        from visprim import io
 
         path = self.paths[self._index(index)]
-        fmt = FORMATS[path.suffix.lower()]
-        opts = {
-            k: v
-            for k, v in self.options.items()
-            if k not in _FORMAT_OPTIONS or fmt in _FORMAT_OPTIONS[k]
-        }
         try:
-            return read_pieces(path, self.arm, **opts)
-        except ReadError as exc:
-            if self.on_error == "raise":
-                raise
-            warnings.warn(f"skipped: {exc}", stacklevel=2)
-            return []
+            fmt = io._format_of(path)
+            opts = {
+                k: v
+                for k, v in self.options.items()
+                if k not in io._FORMAT_OPTIONS or fmt in io._FORMAT_OPTIONS[k]
+            }
+            return io.read_pieces(path, self.arm, **opts)
+        except io.ReadError as exc:
+            err = exc
+        except (ValueError, ArithmeticError, LookupError, TypeError) as exc:
+            # As read_many: data that got past a reader's checks is still one file's problem.
+            err = io.ReadError(path, f"unexpected {type(exc).__name__}: {exc}")
+            err.__cause__ = exc
+        if self.on_error == "raise":
+            raise err
+        warnings.warn(f"skipped: {err}", stacklevel=2)
+        return []
 
     @property
     def source(self) -> dict[str, Any]:

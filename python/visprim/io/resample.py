@@ -19,6 +19,7 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation, Slerp
 
 from visprim import kernels
+from visprim.io.assemble import MAX_FRAMES, period_problem
 from visprim.trial import Trial, Truth
 
 #: Anti-aliasing cutoff as a fraction of the new Nyquist frequency.
@@ -32,6 +33,19 @@ def _lowpass(values: NDArray[np.float64], fs: float, cutoff: float) -> NDArray[n
     flat = np.ascontiguousarray(values.reshape(values.shape[0], -1).T)
     padlen = min(3 * (2 * len(sos) + 1), flat.shape[1] - 1)
     return kernels.sosfiltfilt(sos, flat, padlen=padlen).T.reshape(values.shape)
+
+
+def check_resample_period(period: float) -> float:
+    """``period`` (seconds) as a float if it is a plausible frame period, else a ValueError
+    naming the argument (see :data:`~visprim.io.assemble.MIN_FRAME_PERIOD`)."""
+    try:
+        value = float(period)
+    except (TypeError, ValueError):
+        raise ValueError(f"resample must be a frame period in seconds, got {period!r}") from None
+    problem = period_problem(value)
+    if problem is not None:
+        raise ValueError(f"resample: the frame period {problem}")
+    return value
 
 
 def resample_trial(trial: Trial, period: float, *, antialias: bool = True) -> Trial:
@@ -48,14 +62,19 @@ def resample_trial(trial: Trial, period: float, *, antialias: bool = True) -> Tr
     Raises
     ------
     ValueError
-        For a non-positive period, or one so long that fewer than 2 frames remain.
+        For a period outside 10 µs – 10 s, one so long that fewer than 2 frames remain, or so
+        short that more than :data:`~visprim.io.assemble.MAX_FRAMES` frames would result.
     """
-    period = float(period)
+    period = check_resample_period(period)
     where = trial.source or trial.name or "trial"
-    if not np.isfinite(period) or period <= 0:
-        raise ValueError(f"resample period must be a positive number of seconds, got {period!r}")
     t = trial.times
-    n_new = int(np.floor((t[-1] - t[0]) / period + 1e-9)) + 1
+    span = float(t[-1] - t[0])
+    if span / period + 1 > MAX_FRAMES:
+        raise ValueError(
+            f"{where}: resampling {span:.6g} s every {period:g} s would give "
+            f"{span / period + 1:.3g} frames (more than {MAX_FRAMES:,}); is the period in seconds?"
+        )
+    n_new = int(np.floor(span / period + 1e-9)) + 1
     if n_new < 2:
         raise ValueError(
             f"{where}: resampling {trial.duration:.3f} s at {period:g} s leaves {n_new} frame(s)"
