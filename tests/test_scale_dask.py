@@ -146,4 +146,3 @@ def test_a_task_that_keeps_killing_workers_ends_with_a_clear_error(client, in_me
     corpus = KillOnce(str(tmp_path / "killed"), victim=3, always=True)
     with pytest.raises(RuntimeError, match="kept killing workers"):
         PrimitiveModel(**params).fit(corpus, client=client)
-    client.wait_for_workers(2, timeout=30)
