@@ -320,6 +320,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         y: Any = None,
         *,
         source: dict[str, Any] | None = None,
+        client: Any = None,
     ) -> PrimitiveModel:
         """Learn the primitives from trials or from segment vectors.
 
@@ -341,11 +342,21 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         self : PrimitiveModel
             The fitted model.
 
+        ``trials`` may also be a lazy corpus (:class:`visprim.io.Corpus`,
+        :class:`visprim.io.corpus.GeneratedCorpus`), learned in bounded memory, and
+        ``client`` a Dask client, scheduler address or ``True`` (local cluster) to learn
+        on a cluster (``pip install visprim[dask]``); see :mod:`visprim.scale`. Those fits
+        keep no ``training_vectors_``.
+
         Raises
         ------
         ValueError
             Bad parameters, an empty corpus, fewer segments than ``n_clusters`` (or than 2).
         """
+        if client is not None or hasattr(trials, "chunk_ranges"):
+            from visprim.scale import fit_corpus
+
+            return fit_corpus(self, trials, client=client, source=source)  # type: ignore[no-any-return]
         self._validate_params()
         if not _are_trials(trials):
             return self._fit_array(trials, source=source)
@@ -372,39 +383,76 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
                 "lower n_clusters or give more trials"
             )
         basis = fit_pca(sv.vectors)
-        f = int(self.n_components)
-        p = basis.project(sv.vectors, f)
-        km = kernels.kmeans(
-            np.ascontiguousarray(p),
-            int(self.n_clusters),
-            n_init=int(self.n_init),
-            max_iter=int(self.max_iter),
-            tol=float(self.tol),
-            seed=int(self.seed),
+        counts = corpus.segmentation.counts() if corpus is not None else np.zeros(0)
+        return self._set_fitted(
+            basis,
+            basis.project(sv.vectors, int(self.n_components)),
+            trial=sv.trial,
+            starts=sv.starts,
+            ends=sv.ends,
+            seg2_threshold=corpus.seg2_threshold if corpus is not None else None,
+            trial_names=list(corpus.names) if corpus is not None else [],
+            arms=tuple(corpus.arms) if corpus is not None else ("right",),
+            n_without_segments=int(np.sum(counts == 0)),
+            n_short=int(corpus.n_short) if corpus is not None else 0,
+            vectors=sv.vectors,
+            source=source,
         )
-        self.n_features_in_ = int(sv.vectors.shape[1])
+
+    def _set_fitted(
+        self,
+        basis: PCABasis,
+        projections: NDArray[np.float64] | None,
+        *,
+        trial: NDArray[np.int64],
+        starts: NDArray[np.float64],
+        ends: NDArray[np.float64],
+        seg2_threshold: float | None,
+        trial_names: list[str],
+        arms: tuple[str, ...],
+        n_without_segments: int,
+        n_short: int,
+        vectors: NDArray[np.float64] | None,
+        source: dict[str, Any] | None,
+        clusters: tuple[NDArray[np.float64], NDArray[np.int64], float, int] | None = None,
+    ) -> PrimitiveModel:
+        """Store the fitted state: the PCA ``basis``, k-means of the (N, f) ``projections``
+        (or the given ``clusters`` = centres, labels, inertia, iterations) and where the N
+        segments came from. Shared by the in-memory and the corpus fits
+        (:mod:`visprim.scale`)."""
+        if clusters is None:
+            km = kernels.kmeans(
+                np.ascontiguousarray(projections),
+                int(self.n_clusters),
+                n_init=int(self.n_init),
+                max_iter=int(self.max_iter),
+                tol=float(self.tol),
+                seed=int(self.seed),
+            )
+            clusters = (km.centers, km.labels, km.inertia, km.n_iter)
+        centers, labels, inertia, n_iter = clusters
         self.mean_ = basis.mean
         self.eigenvalues_ = basis.eigenvalues
         self.eigenvectors_ = basis.eigenvectors
-        self.n_training_segments_ = n
-        self.cluster_centers_ = np.asarray(km.centers, dtype=np.float64)
-        self.labels_ = np.asarray(km.labels, dtype=np.int64)
-        self.inertia_ = float(km.inertia)
-        self.n_iter_ = int(km.n_iter)
-        self.segment_trial_ = sv.trial
-        self.segment_starts_ = sv.starts
-        self.segment_ends_ = sv.ends
+        self.n_training_segments_ = int(trial.shape[0])
+        self.cluster_centers_ = np.asarray(centers, dtype=np.float64)
+        self.labels_ = np.asarray(labels, dtype=np.int64)
+        self.inertia_ = float(inertia)
+        self.n_iter_ = int(n_iter)
+        self.segment_trial_ = trial
+        self.segment_starts_ = starts
+        self.segment_ends_ = ends
         self.primitive_durations_ = _mean_durations(
-            sv.durations, self.labels_, int(self.n_clusters)
+            ends - starts, self.labels_, int(self.n_clusters)
         )
-        self.seg2_threshold_ = corpus.seg2_threshold if corpus is not None else None
-        self.trial_names_ = list(corpus.names) if corpus is not None else []
-        self.arms_ = tuple(corpus.arms) if corpus is not None else ("right",)
-        counts = corpus.segmentation.counts() if corpus is not None else np.zeros(0)
-        self.n_trials_without_segments_ = int(np.sum(counts == 0))
-        self.n_short_trials_ = int(corpus.n_short) if corpus is not None else 0
-        self.training_vectors_: NDArray[np.float64] | None = sv.vectors
-        self.training_projections_: NDArray[np.float64] | None = p
+        self.seg2_threshold_ = seg2_threshold
+        self.trial_names_ = trial_names
+        self.arms_ = tuple(arms)
+        self.n_features_in_ = int(basis.mean.shape[0])
+        self.n_trials_without_segments_ = int(n_without_segments)
+        self.n_short_trials_ = int(n_short)
+        self.training_vectors_: NDArray[np.float64] | None = vectors
+        self.training_projections_: NDArray[np.float64] | None = projections
         self.error_tables_: ErrorTables | None = None
         self.training_source_ = dict(source or {})
         return self

@@ -16,6 +16,8 @@ log = logging.getLogger(__name__)
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.dask is not None or args.stream:
+        return _run_corpus(args)
     from visprim.modelfile import save_model
     from visprim.progress import stages
 
@@ -54,6 +56,41 @@ def _with_fix(message: str) -> str:
     return message
 
 
+def _run_corpus(args: argparse.Namespace) -> int:
+    """Learn from a lazy corpus: streaming (``--stream``) or on Dask (``--dask``)."""
+    from visprim.io.corpus import Corpus, GeneratedCorpus
+    from visprim.modelfile import save_model
+
+    data = list(args.data or [])
+    if data and args.generated:
+        raise common.UsageError("give DATA files or --generated, not both")
+    try:
+        corpus = (
+            Corpus(data, resample=args.resample, **common.reader_options(args))
+            if data
+            # The lazy generated corpus is the "strokes" preset's (one trial at a time).
+            else GeneratedCorpus(args.subjects, args.stimuli, args.data_seed)
+        )
+    except ValueError as exc:
+        raise common.CLIError(str(exc)) from None
+    model = common.model_from_args(args)
+    client: Any = None if args.dask is None else (args.dask or True)
+    how = "streaming" if client is None else f"Dask ({args.dask or 'local cluster'})"
+    try:
+        model.fit(corpus, client=client)
+    except ValueError as exc:
+        hint = " (option --clusters)" if "n_clusters=" in str(exc) else ""
+        raise common.CLIError(f"{exc}{hint}") from None
+    except (ImportError, RuntimeError, OSError) as exc:
+        raise common.CLIError(str(exc)) from None
+    path = save_model(model, args.out)
+    print(f"learned by {how} from {len(corpus)} items")
+    print(common.summary(model, len(model.trial_names_)))
+    print("(error tables need the training vectors: run learn without --dask/--stream)")
+    print(f"model written to {path}")
+    return 0
+
+
 def register(sub: Any) -> None:
     """Add the command to ``sub`` (from :meth:`argparse.ArgumentParser.add_subparsers`)."""
     p = sub.add_parser(
@@ -86,6 +123,20 @@ def register(sub: Any) -> None:
         help="keep each recording's own frame rate",
     )
     common.add_reader_options(p)
+    p.add_argument(
+        "--dask",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="ADDRESS",
+        help="learn on a Dask cluster: the scheduler's ADDRESS (tcp://host:8786), or a local "
+        "cluster without it (needs pip install 'visprim[dask]'); no error tables",
+    )
+    p.add_argument(
+        "--stream",
+        action="store_true",
+        help="learn in bounded memory, reading DATA in chunks (no error tables)",
+    )
     common.add_generated_options(p)
     common.add_model_options(p)
     p.set_defaults(func=run)

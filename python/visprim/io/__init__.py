@@ -41,6 +41,7 @@ from typing import Any
 import numpy as np
 
 from visprim.io.assemble import ArmRecording, align_heading, check_up_axis
+from visprim.io.corpus import Corpus
 from visprim.io.errors import (
     FrameCountError,
     GapError,
@@ -59,6 +60,7 @@ __all__ = [
     "FORMATS",
     "MARKER_PRESETS",
     "RIG_PRESETS",
+    "Corpus",
     "FrameCountError",
     "GapError",
     "MalformedFileError",
@@ -74,7 +76,13 @@ __all__ = [
 ]
 
 #: Supported extensions (lower case) → format name.
-FORMATS: dict[str, str] = {".bvh": "bvh", ".amc": "amc", ".c3d": "c3d", ".csv": "csv"}
+FORMATS: dict[str, str] = {
+    ".bvh": "bvh",
+    ".amc": "amc",
+    ".c3d": "c3d",
+    ".csv": "csv",
+    ".npz": "amass",
+}
 #: Options that only apply to some formats (the marker CSV is already an arm trial in the
 #: common frame). read() refuses them for other files; read_many() passes them only there.
 _FORMAT_OPTIONS: dict[str, tuple[str, ...]] = {
@@ -83,8 +91,8 @@ _FORMAT_OPTIONS: dict[str, tuple[str, ...]] = {
     "units": ("bvh",),
     "mapping": ("bvh", "amc", "c3d"),
     "preset": ("bvh", "amc", "c3d"),
-    "up_axis": ("bvh", "amc", "c3d"),
-    "mirror": ("bvh", "amc", "c3d"),
+    "up_axis": ("bvh", "amc", "c3d", "amass"),
+    "mirror": ("bvh", "amc", "c3d", "amass"),
 }
 
 _BANDAI = re.compile(
@@ -531,6 +539,10 @@ def _read_arm(p: Path, fmt: str, arm: str, **kw: Any) -> list[ArmRecording]:
                 units=kw["units"],
             )
         ]
+    if fmt == "amass":
+        from visprim.io.amass import read_amass_arm
+
+        return [read_amass_arm(p, arm, up_axis=kw["up_axis"])]
     if fmt == "amc":
         from visprim.io.asfamc import read_amc_arm
 
