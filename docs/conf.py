@@ -44,6 +44,11 @@ autodoc_default_options = {
             "set_predict_request",
             "set_score_request",
             "set_transform_request",
+            "set_predict_proba_request",
+            "set_decision_function_request",
+            "set_partial_fit_request",
+            "set_score_samples_request",
+            "set_inverse_transform_request",
         ]
     ),
 }

@@ -263,8 +263,8 @@ class PrimitiveHistogramClassifier(ClassifierMixin, BaseEstimator):  # type: ign
     C : float
         Inverse regularisation strength of the logistic regression.
 
-    Attributes (after ``fit``)
-    --------------------------
+    Attributes
+    ----------
     model_ : the fitted PrimitiveModel.
     classifier_ : the fitted scikit-learn classifier.
     classes_ : (n_classes,) the labels seen in ``fit``.
@@ -700,8 +700,8 @@ class MotionClassifier(_NearestSequences):
     n_neighbors : int
         Neighbours voting (default 1).
 
-    Attributes (after ``fit``)
-    --------------------------
+    Attributes
+    ----------
     model_ : the fitted PrimitiveModel.
     window_seconds_ : float — the window of the per-frame descriptions, seconds.
     weights_ : dict — weight of each DTW cost in the sum (already divided by its scale).
