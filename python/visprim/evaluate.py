@@ -52,8 +52,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from visprim import kernels
-from visprim.classify import MotionClassifier, arm_directions, dtw_matrix
 from visprim.accuracy import angular_error_deg
+from visprim.classify import MotionClassifier, arm_directions, dtw_matrix
 from visprim.features import from_angles
 from visprim.segment.coverage import DEFAULT_MOVING_SPEED, segment_coverage
 from visprim.trial import Trial
