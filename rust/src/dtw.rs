@@ -54,7 +54,7 @@ impl<'a> Set<'a> {
                 "{name}: frames need at least one channel (dim = 0)"
             )));
         }
-        if values.len() % dim != 0 {
+        if !values.len().is_multiple_of(dim) {
             return Err(Error::Shape(format!(
                 "{name}: {} values do not split into frames of {dim} channels",
                 values.len()
