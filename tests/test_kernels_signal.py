@@ -480,3 +480,15 @@ def test_resample_errors() -> None:
         K.resample_segments(np.zeros((0, 2)), np.empty(0), np.empty(0), 5)
     with pytest.raises(TypeError, match="values must have dtype float64"):
         V.resample_segments(values.astype(np.float32), np.array([0.0]), one, 5)
+
+
+def test_index_and_value_arrays_of_any_real_dtype_are_converted() -> None:
+    values = np.arange(200.0).reshape(100, 2)
+    want = K.resample_segments(values, np.array([0.0, 50.0]), np.array([40.0, 99.0]), 7)
+    got = K.resample_segments(values, np.array([0, 50]), np.array([40, 99], dtype=np.uint8), 7)
+    np.testing.assert_array_equal(got, want)
+    got32 = K.resample_segments(values.astype(np.float32), [0, 50], [40, 99], np.int16(7))
+    np.testing.assert_array_equal(got32, want)
+    filt = K.sosfiltfilt_ragged(SOS, values, np.array([0, 40], dtype=np.uint32), padlen=5)
+    filt_int = K.sosfiltfilt_ragged(SOS, values.astype(np.int32), [0, 40], padlen=np.int64(5))
+    np.testing.assert_array_equal(filt, filt_int)
