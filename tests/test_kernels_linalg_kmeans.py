@@ -14,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from sklearn.cluster import KMeans
 from sklearn.datasets import make_blobs
+from visprim import _visprim as V
 from visprim import kernels as K
 
 
@@ -146,6 +147,7 @@ def test_same_seed_same_result_and_seeds_differ() -> None:
 _THREAD_SCRIPT = """
 import hashlib, numpy as np
 from sklearn.datasets import make_blobs
+from visprim import _visprim as V
 from visprim import kernels as K
 x, _ = make_blobs(n_samples=30000, n_features=12, centers=40, random_state=5)
 r = K.kmeans(x, 50, seed=3, n_init=2)
@@ -215,7 +217,7 @@ def test_kmeans_property(n: int, d: int, data: st.DataObject) -> None:
 def test_kmeans_errors() -> None:
     x = np.random.default_rng(0).standard_normal((10, 2))
     with pytest.raises(TypeError, match="float64, got float32"):
-        K.kmeans(x.astype(np.float32), 2)
+        V.kmeans(x.astype(np.float32), 2)
     with pytest.raises(TypeError, match="numpy.ndarray"):
         K.kmeans_predict(x, "centres")
     with pytest.raises(ValueError, match="2-D"):
@@ -224,7 +226,7 @@ def test_kmeans_errors() -> None:
         K.kmeans(np.zeros((0, 2)), 1)
     with pytest.raises(ValueError, match=r"k must be between 1 and the number of rows of X \(10\)"):
         K.kmeans(x, 11)
-    with pytest.raises(ValueError, match="k must be between 1"):
+    with pytest.raises(ValueError, match=r"k \(the number of clusters\) must be an integer >= 1"):
         K.kmeans(x, 0)
     with pytest.raises(ValueError, match="NaN or infinity"):
         K.kmeans(np.where(np.arange(20).reshape(10, 2) == 7, np.nan, x), 2)

@@ -7,6 +7,7 @@ import re
 import numpy as np
 import pytest
 import scipy.signal as ss
+from visprim import _visprim as V
 from visprim import kernels as K
 
 ORDERS = range(1, 13)
@@ -330,8 +331,8 @@ def test_butter_sos_non_integer_order() -> None:
 @pytest.mark.parametrize(
     ("sos", "x", "kwargs", "exc", "match"),
     [
-        (SOS, np.zeros(100, dtype=np.float32), {}, TypeError, "x must have dtype float64"),
-        (SOS, np.zeros(100, dtype=np.int64), {}, TypeError, "float64"),
+        (SOS, np.zeros(100, dtype=np.complex64), {}, TypeError, "x must hold real numbers"),
+        (SOS, np.array(["a"] * 100), {}, TypeError, "x must hold real numbers"),
         (
             SOS,
             np.zeros((2, 2, 100)),
@@ -344,11 +345,17 @@ def test_butter_sos_non_integer_order() -> None:
         (SOS * np.array([1, 1, 1, 2, 1, 1]), np.zeros(100), {}, ValueError, "a0"),
         (SOS[:0], np.zeros(100), {}, ValueError, "at least one section"),
         (np.where(SOS == 1.0, np.inf, SOS), np.zeros(100), {}, ValueError, "NaN or infinity"),
-        (SOS.astype(np.float32), np.zeros(100), {}, TypeError, "sos must have dtype float64"),
+        (SOS.astype(np.complex128), np.zeros(100), {}, TypeError, "sos must hold real numbers"),
         (SOS, np.zeros(0), {}, ValueError, "empty"),
         (SOS, np.zeros((0, 50)), {}, ValueError, "empty"),
-        (SOS, np.zeros(100), {"padlen": -1}, ValueError, "padlen must be >= 0"),
-        ("not an array", np.zeros(100), {}, ValueError, "could not convert"),
+        (
+            SOS,
+            np.zeros(100),
+            {"padlen": -1},
+            ValueError,
+            r"padlen \(samples of odd extension at each end\) must be an integer >= 0",
+        ),
+        ("not an array", np.zeros(100), {}, TypeError, "sos must hold real numbers"),
     ],
 )
 def test_sosfiltfilt_errors(sos, x, kwargs, exc, match) -> None:  # type: ignore[no-untyped-def]
@@ -384,7 +391,13 @@ def test_sosfiltfilt_too_short_names_both_lengths() -> None:
         (np.array([0, -5]), ValueError, "strictly increasing"),
         (np.array([], dtype=np.int64), ValueError, "offsets is empty"),
         (np.array([[0, 50]]), ValueError, "offsets must be 1-D"),
-        (np.array([0.0, 50.0]), TypeError, "offsets must have dtype int64"),
+        (
+            np.array([0.0, 50.0]),
+            TypeError,
+            r"offsets must hold integers \(indices\), got dtype float64",
+        ),
+        (np.array([0, 2**63], dtype=np.uint64), ValueError, "beyond the int64 range"),
+        (np.array([0, 50], dtype=np.uint16), None, ""),
         ([0, 50], None, ""),
     ],
 )
@@ -408,7 +421,7 @@ def test_sosfiltfilt_ragged_errors() -> None:
     ):
         K.sosfiltfilt_ragged(SOS, values, np.array([0, 140]))
     with pytest.raises(TypeError, match="values must have dtype float64"):
-        K.sosfiltfilt_ragged(SOS, values.astype(np.float32), np.array([0]))
+        V.sosfiltfilt_ragged(SOS, values.astype(np.float32), np.array([0]))
     with pytest.raises(ValueError, match=r"values must be 1-D or 2-D"):
         K.sosfiltfilt_ragged(SOS, np.zeros((5, 5, 5)), np.array([0]))
     bad = values.copy()
@@ -422,7 +435,7 @@ def test_sosfiltfilt_ragged_errors() -> None:
 def test_zvc_errors() -> None:
     v = np.array([1.0, -1.0, 1.0])
     with pytest.raises(TypeError, match="velocity must have dtype float64"):
-        K.zero_velocity_crossings(v.astype(np.float32))
+        V.zero_velocity_crossings(v.astype(np.float32))
     with pytest.raises(ValueError, match="velocity must be 1-D or 2-D"):
         K.zero_velocity_crossings(np.zeros((2, 2, 2)))
     with pytest.raises(ValueError, match="empty"):
@@ -439,7 +452,7 @@ def test_zvc_errors() -> None:
     with pytest.raises(ValueError, match=r"positions must have the shape of velocity \(3,\)"):
         K.zero_velocity_crossings(v, positions=np.zeros(4))
     with pytest.raises(TypeError, match="positions must have dtype float64"):
-        K.zero_velocity_crossings(v, positions=np.zeros(3, dtype=np.float32))
+        V.zero_velocity_crossings(v, positions=np.zeros(3, dtype=np.float32))
 
 
 def test_resample_errors() -> None:
@@ -452,12 +465,12 @@ def test_resample_errors() -> None:
         ((np.array([np.nan]), one), ValueError, "not finite"),
         ((np.array([0.0, 1.0]), one), ValueError, "same length"),
         ((np.zeros((1, 1)), one), ValueError, "starts must be 1-D"),
-        ((np.array([0], dtype=np.int64), one), TypeError, "starts must have dtype float64"),
+        ((np.array([0j]), one), TypeError, "starts must hold real numbers"),
     ]
     for (starts, ends), exc, match in cases:
         with pytest.raises(exc, match=match):
             K.resample_segments(values, starts, ends, 5)
-    with pytest.raises(ValueError, match="n .* must be at least 2"):
+    with pytest.raises(ValueError, match=r"n \(samples per channel\) must be an integer >= 2"):
         K.resample_segments(values, np.array([0.0]), one, 1)
     with pytest.raises(ValueError, match=r"values contains NaN or infinity \(frame 3, channel 1\)"):
         bad = values.copy()
@@ -466,4 +479,16 @@ def test_resample_errors() -> None:
     with pytest.raises(ValueError, match="empty"):
         K.resample_segments(np.zeros((0, 2)), np.empty(0), np.empty(0), 5)
     with pytest.raises(TypeError, match="values must have dtype float64"):
-        K.resample_segments(values.astype(np.float32), np.array([0.0]), one, 5)
+        V.resample_segments(values.astype(np.float32), np.array([0.0]), one, 5)
+
+
+def test_index_and_value_arrays_of_any_real_dtype_are_converted() -> None:
+    values = np.arange(200.0).reshape(100, 2)
+    want = K.resample_segments(values, np.array([0.0, 50.0]), np.array([40.0, 99.0]), 7)
+    got = K.resample_segments(values, np.array([0, 50]), np.array([40, 99], dtype=np.uint8), 7)
+    np.testing.assert_array_equal(got, want)
+    got32 = K.resample_segments(values.astype(np.float32), [0, 50], [40, 99], np.int16(7))
+    np.testing.assert_array_equal(got32, want)
+    filt = K.sosfiltfilt_ragged(SOS, values, np.array([0, 40], dtype=np.uint32), padlen=5)
+    filt_int = K.sosfiltfilt_ragged(SOS, values.astype(np.int32), [0, 40], padlen=np.int64(5))
+    np.testing.assert_array_equal(filt, filt_int)

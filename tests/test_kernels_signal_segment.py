@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from visprim import _visprim as V
 from visprim import kernels as K
 
 SETTINGS = settings(max_examples=40, deadline=None, derandomize=True)
@@ -70,7 +71,7 @@ def test_gradient_ragged_errors() -> None:
     t = np.arange(6.0)
     x = np.zeros((6, 2))
     with pytest.raises(TypeError, match="values must have dtype float64"):
-        K.gradient_ragged(t, x.astype(np.float32), [0])
+        V.gradient_ragged(t, x.astype(np.float32), np.array([0]))
     with pytest.raises(ValueError, match=r"times must have shape \(6,\)"):
         K.gradient_ragged(t[:5], x, [0])
     with pytest.raises(ValueError, match="trial 1 has fewer than 2 frames"):
@@ -142,7 +143,7 @@ def test_seg1_events_errors() -> None:
     with pytest.raises(ValueError, match="NaN or infinity"):
         K.seg1_events([0], [0], [np.nan], 0.3)
     with pytest.raises(TypeError, match="time must have dtype float64"):
-        K.seg1_events([0], [0], np.zeros(1, dtype=np.float32), 0.3)
+        V.seg1_events(np.zeros(1, np.int64), np.zeros(1, np.int64), np.zeros(1, np.float32), 0.3)
     trial, time, n = K.seg1_events([], [], np.zeros(0), 0.3)
     assert trial.size == time.size == n.size == 0
 

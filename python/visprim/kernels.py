@@ -3,8 +3,26 @@
 Thin, documented re-exports: every function validates its input (dtype, shape, NaN/inf,
 empty input) and raises :class:`ValueError` or :class:`TypeError` with a readable message;
 the computation runs with the GIL released and results come back as numpy arrays without a
-copy. Arrays are float64; signals are laid out with time along the first axis of
-``(frames, channels)`` for the ragged forms and along the last axis for ``sosfiltfilt``.
+copy. Signals are laid out with time along the first axis of ``(frames, channels)`` for the
+ragged forms and along the last axis for ``sosfiltfilt``.
+
+Conventions of every function here:
+
+* Value arrays accept any real dtype (bool, integers, floats) and lists; they are converted
+  to float64 as ``numpy.asarray(x).astype(numpy.float64)`` does (float64 arrays pass without
+  a copy). Complex, string or object arrays raise :class:`TypeError`.
+* Index arrays (``offsets``, ``trial``, ``channel``) accept any integer dtype and lists of
+  integers, converted to int64 exactly (a uint64 value above ``2**63 - 1`` raises
+  :class:`ValueError`); floats raise :class:`TypeError` (as numpy refuses float indices),
+  except an empty array.
+* Integer arguments (``n``, ``k``, ``padlen``, ``n_threads``, ...) accept any Python or numpy
+  integer; a value outside the argument's range, however large or negative, raises
+  :class:`ValueError` naming the argument (never :class:`OverflowError`).
+* An output or workspace too large for this machine's memory (or whose size overflows)
+  raises :class:`MemoryError` naming the sizes, before anything large is allocated.
+
+The compiled functions in :mod:`visprim._visprim` are strict (float64 / int64 arrays only);
+the conversions live here.
 """
 
 from __future__ import annotations
@@ -22,20 +40,39 @@ _F64 = NDArray[np.float64]
 _I64 = NDArray[np.int64]
 
 
-def _f64(x: ArrayLike) -> Any:
-    """Arrays pass through unchanged (the kernel checks their dtype strictly: float32 or int
-    arrays raise TypeError); lists and scalars become float64 arrays."""
-    return x if isinstance(x, np.ndarray) else np.asarray(x, dtype=np.float64)
+_REAL_KINDS = "biuf"
 
 
-def _offsets(offsets: ArrayLike) -> Any:
-    """Trial offsets as int64: any integer array is converted (exactly); lists too."""
-    o = np.asarray(offsets)
-    if o.dtype.kind in "iu" and o.dtype != np.int64:
-        o = o.astype(np.int64)
-    elif o.size == 0 and o.dtype.kind == "f":
-        o = o.astype(np.int64)
-    return o
+def _f64(x: ArrayLike, name: str = "x") -> Any:
+    """``x`` as a float64 array: float64 arrays pass unchanged, any other real dtype (bool,
+    integers, other floats) and lists are converted as ``astype(numpy.float64)`` does."""
+    a = x if isinstance(x, np.ndarray) else np.asarray(x)
+    if a.dtype == np.float64:
+        return a
+    if a.dtype.kind not in _REAL_KINDS:
+        raise TypeError(f"{name} must hold real numbers, got dtype {a.dtype}")
+    return a.astype(np.float64)
+
+
+_I64_MAX = np.iinfo(np.int64).max
+
+
+def _index(x: ArrayLike, name: str = "offsets") -> Any:
+    """``x`` as an int64 array: any integer dtype is converted exactly (uint64 values above
+    ``2**63 - 1`` raise ValueError); floats raise TypeError, except an empty array."""
+    a = x if isinstance(x, np.ndarray) else np.asarray(x)
+    if a.dtype == np.int64:
+        return a
+    if a.dtype.kind == "u":
+        if a.size and a.max() > _I64_MAX:
+            raise ValueError(f"{name} holds {a.max()}, beyond the int64 range of indices")
+        return a.astype(np.int64)
+    if a.dtype.kind == "i" or (a.size == 0 and a.dtype.kind in "fb"):
+        return a.astype(np.int64)
+    raise TypeError(f"{name} must hold integers (indices), got dtype {a.dtype}")
+
+
+_offsets = _index
 
 
 def butter_sos(order: int, cutoff: float) -> _F64:
@@ -61,7 +98,7 @@ def butter_sos(order: int, cutoff: float) -> _F64:
 def default_padlen(sos: ArrayLike) -> int:
     """scipy's default ``padlen`` of :func:`sosfiltfilt` for ``sos``, in samples:
     ``3 * (2 * n_sections + 1 - min(#{b2 == 0}, #{a2 == 0}))``. Signals must be longer."""
-    return _visprim.default_padlen(_f64(sos))
+    return _visprim.default_padlen(_f64(sos, "sos"))
 
 
 def sosfiltfilt(sos: ArrayLike, x: ArrayLike, padlen: int | None = None) -> _F64:
@@ -87,7 +124,7 @@ def sosfiltfilt(sos: ArrayLike, x: ArrayLike, padlen: int | None = None) -> _F64
         ValueError: wrong ndim or sos shape, NaN/inf, ``a0 != 1``, empty ``x``, or a signal not
             longer than ``padlen`` (the message gives both lengths).
     """
-    return _visprim.sosfiltfilt(_f64(sos), _f64(x), padlen)
+    return _visprim.sosfiltfilt(_f64(sos, "sos"), _f64(x, "x"), padlen)
 
 
 def sosfiltfilt_ragged(
@@ -115,7 +152,9 @@ def sosfiltfilt_ragged(
         ValueError: invalid offsets, NaN/inf, or a trial not longer than ``padlen`` (the
             message names the trial and both lengths).
     """
-    return _visprim.sosfiltfilt_ragged(_f64(sos), _f64(values), _offsets(offsets), padlen)
+    return _visprim.sosfiltfilt_ragged(
+        _f64(sos, "sos"), _f64(values, "values"), _index(offsets), padlen
+    )
 
 
 def gradient_ragged(times: ArrayLike, values: ArrayLike, offsets: ArrayLike) -> _F64:
@@ -140,7 +179,7 @@ def gradient_ragged(times: ArrayLike, values: ArrayLike, offsets: ArrayLike) -> 
         ValueError: shapes that do not match, invalid offsets, a trial of fewer than 2 frames,
             timestamps that are not finite or not strictly increasing in a trial.
     """
-    return _visprim.gradient_ragged(_f64(times), _f64(values), _offsets(offsets))
+    return _visprim.gradient_ragged(_f64(times, "times"), _f64(values, "values"), _index(offsets))
 
 
 def zero_velocity_crossings(
@@ -171,8 +210,8 @@ def zero_velocity_crossings(
         ``(frames, channels)``: fractional frame indices (float64) and channel indices
         (int64), sorted by channel then frame.
     """
-    pos = None if positions is None else _f64(positions)
-    return _visprim.zero_velocity_crossings(_f64(velocity), float(min_change), pos)
+    pos = None if positions is None else _f64(positions, "positions")
+    return _visprim.zero_velocity_crossings(_f64(velocity, "velocity"), min_change, pos)
 
 
 def zero_velocity_crossings_ragged(
@@ -191,9 +230,9 @@ def zero_velocity_crossings_ragged(
         ``(trial, channel, frame)``: int64 trial and channel indices and float64 fractional
         frames RELATIVE to the trial's first frame, sorted by trial, channel, frame.
     """
-    pos = None if positions is None else _f64(positions)
+    pos = None if positions is None else _f64(positions, "positions")
     return _visprim.zero_velocity_crossings_ragged(
-        _f64(velocity), _offsets(offsets), float(min_change), pos
+        _f64(velocity, "velocity"), _index(offsets), min_change, pos
     )
 
 
@@ -217,7 +256,9 @@ def seg1_events(
         float64 median time (seconds) of the event's crossings (mean of the two middle ones
         for an even count) and the int64 number of distinct channels among them.
     """
-    return _visprim.seg1_events(_offsets(trial), _offsets(channel), _f64(time), float(window))
+    return _visprim.seg1_events(
+        _index(trial, "trial"), _index(channel, "channel"), _f64(time, "time"), window
+    )
 
 
 def times_to_frames(times: ArrayLike, offsets: ArrayLike, trial: ArrayLike, t: ArrayLike) -> _F64:
@@ -237,7 +278,9 @@ def times_to_frames(times: ArrayLike, offsets: ArrayLike, trial: ArrayLike, t: A
         float64 ``(m,)`` fractional frames relative to each trial's first frame, in
         ``[0, n_frames_of_trial - 1]``.
     """
-    return _visprim.times_to_frames(_f64(times), _offsets(offsets), _offsets(trial), _f64(t))
+    return _visprim.times_to_frames(
+        _f64(times, "times"), _index(offsets), _index(trial, "trial"), _f64(t, "t")
+    )
 
 
 def resample_segments(values: ArrayLike, starts: ArrayLike, ends: ArrayLike, n: int = 100) -> _F64:
@@ -257,16 +300,20 @@ def resample_segments(values: ArrayLike, starts: ArrayLike, ends: ArrayLike, n: 
         ``(n_segments, channels * n)`` float64, channel-major (all ``n`` samples of channel 0,
         then channel 1, ...). No segments gives shape ``(0, channels * n)``.
     """
-    return _visprim.resample_segments(_f64(values), _f64(starts), _f64(ends), n)
+    return _visprim.resample_segments(
+        _f64(values, "values"), _f64(starts, "starts"), _f64(ends, "ends"), n
+    )
 
 
 # --- linalg kernels (covariance, eigh, kmeans) ---
 
 
-def _matrix(x: ArrayLike) -> Any:
-    """Nested lists/tuples become float64 arrays; anything else goes to the kernel unchanged
-    (it raises TypeError for non-arrays and for float32/int arrays: convert on purpose)."""
-    return np.asarray(x, dtype=np.float64) if isinstance(x, (list, tuple)) else x
+def _matrix(x: ArrayLike, name: str = "X") -> Any:
+    """Arrays of any real dtype and nested lists/tuples become float64 arrays (see
+    :func:`_f64`); other objects go to the kernel unchanged (it raises TypeError)."""
+    if isinstance(x, (np.ndarray, list, tuple)):
+        return _f64(x, name)
+    return x
 
 
 def covariance(x: ArrayLike, *, n_threads: int | None = None) -> tuple[_F64, _F64]:
@@ -318,7 +365,7 @@ def eigh(a: ArrayLike, *, k: int | None = None) -> tuple[_F64, _F64]:
             out of range.
         RuntimeError: the eigensolver did not converge.
     """
-    return _visprim.eigh(_matrix(a), k=k)
+    return _visprim.eigh(_matrix(a, "K"), k=k)
 
 
 KMeansResult = _visprim.KMeansResult
@@ -387,7 +434,7 @@ def kmeans(
         max_iter=max_iter,
         tol=tol,
         seed=seed,
-        init=None if init is None else _matrix(init),
+        init=None if init is None else _matrix(init, "init"),
         n_local_trials=n_local_trials,
         n_threads=n_threads,
     )
@@ -411,7 +458,7 @@ def kmeans_predict(
         TypeError: an argument is not a float64 ndarray.
         ValueError: not 2-D, empty, column counts differ, or NaN/inf.
     """
-    return _visprim.kmeans_predict(_matrix(x), _matrix(centers), n_threads=n_threads)
+    return _visprim.kmeans_predict(_matrix(x), _matrix(centers, "centers"), n_threads=n_threads)
 
 
 def kmeans_plusplus(

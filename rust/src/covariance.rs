@@ -23,6 +23,7 @@ use faer::linalg::matmul::triangular::{matmul, BlockStructure};
 use faer::{Accum, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
+use crate::buffer;
 use crate::{Error, Result};
 
 /// Rows per centred sub-block fed to the matrix product (the block stays in L2 for d ≈ 400).
@@ -47,13 +48,15 @@ pub struct Moments {
 
 impl Moments {
     /// An empty accumulator for rows of dimension `dim`.
-    pub fn new(dim: usize) -> Self {
-        Self {
+    ///
+    /// Errors: a `dim × dim` scatter matrix that cannot be allocated (Memory).
+    pub fn new(dim: usize) -> Result<Self> {
+        Ok(Self {
             dim,
             count: 0,
-            mean: vec![0.0; dim],
-            scatter: vec![0.0; dim * dim],
-        }
+            mean: buffer::try_zeroed_f64(dim, "the mean")?,
+            scatter: buffer::try_zeroed_f64(scatter_len(dim)?, "the scatter matrix")?,
+        })
     }
 
     /// The statistics of the `n` rows of the row-major `n × dim` matrix `x`.
@@ -63,8 +66,9 @@ impl Moments {
     pub fn from_rows(x: &[f64], n: usize, dim: usize) -> Result<Self> {
         check_rows(x, n, dim, "X")?;
         if n == 0 {
-            return Ok(Self::new(dim));
+            return Self::new(dim);
         }
+        scatter_len(dim)?;
         // Wide rows: one part, faer's matrix product parallel over the output (its split never
         // changes the summation order). Narrow rows: independent parts in parallel.
         let wide = dim >= WIDE;
@@ -81,7 +85,7 @@ impl Moments {
                 let end = ((p + 1) * part_rows).min(n);
                 block_moments(&x[start * dim..end * dim], end - start, dim, par)
             })
-            .collect();
+            .collect::<Result<_>>()?;
         // The parts hold lower triangles only: merge those, mirror once.
         let mut iter = partials.into_iter();
         let mut acc = iter.next().expect("at least one part");
@@ -90,6 +94,16 @@ impl Moments {
         }
         symmetrize_from_lower(&mut acc.scatter, dim);
         Ok(acc)
+    }
+
+    /// A copy; a failed allocation is an error (Memory), not an abort.
+    pub fn try_clone(&self) -> Result<Self> {
+        Ok(Self {
+            dim: self.dim,
+            count: self.count,
+            mean: buffer::try_copy(&self.mean, "the mean")?,
+            scatter: buffer::try_copy(&self.scatter, "the scatter matrix")?,
+        })
     }
 
     /// Dimension of the rows.
@@ -117,7 +131,7 @@ impl Moments {
     /// Errors: lengths that do not match `dim`, non-finite values, or a scatter matrix that is
     /// not symmetric.
     pub fn from_parts(dim: usize, count: u64, mean: Vec<f64>, scatter: Vec<f64>) -> Result<Self> {
-        if mean.len() != dim || scatter.len() != dim * dim {
+        if mean.len() != dim || Some(scatter.len()) != dim.checked_mul(dim) {
             return Err(Error::Shape(format!(
                 "moments of dimension {dim} need a mean of length {dim} and a {dim}x{dim} \
                  scatter matrix, got lengths {} and {}",
@@ -172,7 +186,10 @@ impl Moments {
             return;
         }
         if self.count == 0 {
-            *self = other.clone();
+            // Same dimension: copy into the buffers already held (no allocation).
+            self.mean.copy_from_slice(&other.mean);
+            self.scatter.copy_from_slice(&other.scatter);
+            self.count = other.count;
             return;
         }
         let d = self.dim;
@@ -203,9 +220,26 @@ impl Moments {
         if self.count == 0 {
             return Err(Error::Shape("covariance of zero rows is undefined".into()));
         }
+        let mut cov = buffer::try_copy(&self.scatter, "the covariance matrix")?;
         let inv = 1.0 / self.count as f64;
-        Ok(self.scatter.iter().map(|s| s * inv).collect())
+        cov.iter_mut().for_each(|s| *s *= inv);
+        Ok(cov)
     }
+
+    /// [`Moments::covariance`] in the scatter matrix's own buffer, with the mean.
+    fn into_mean_covariance(mut self) -> Result<(Vec<f64>, Vec<f64>)> {
+        if self.count == 0 {
+            return Err(Error::Shape("covariance of zero rows is undefined".into()));
+        }
+        let inv = 1.0 / self.count as f64;
+        self.scatter.iter_mut().for_each(|s| *s *= inv);
+        Ok((self.mean, self.scatter))
+    }
+}
+
+/// Length `dim²` of a scatter matrix, checked (overflow, machine memory).
+fn scatter_len(dim: usize) -> Result<usize> {
+    buffer::elements::<f64>(&[dim, dim], "the scatter matrix")
 }
 
 /// Mean `(d,)` and covariance `(d, d)` with divisor N of the rows of the row-major `n × d`
@@ -218,13 +252,11 @@ pub fn covariance(x: &[f64], n: usize, d: usize) -> Result<(Vec<f64>, Vec<f64>)>
             "X is empty (shape {n}x{d}); need at least one row and one column"
         )));
     }
-    let m = Moments::from_rows(x, n, d)?;
-    let cov = m.covariance()?;
-    Ok((m.mean, cov))
+    Moments::from_rows(x, n, d)?.into_mean_covariance()
 }
 
 fn check_rows(x: &[f64], n: usize, dim: usize, name: &str) -> Result<()> {
-    if x.len() != n * dim {
+    if Some(x.len()) != n.checked_mul(dim) {
         return Err(Error::Shape(format!(
             "{name} has {} values, expected {n} rows x {dim} columns",
             x.len()
@@ -242,22 +274,33 @@ fn check_rows(x: &[f64], n: usize, dim: usize, name: &str) -> Result<()> {
 
 /// Copy the lower triangle of a row-major `d × d` matrix onto its upper triangle.
 fn symmetrize_from_lower(a: &mut [f64], d: usize) {
+    mirror::<true>(a, d);
+}
+
+/// Copy the lower (`FROM_LOWER`) or upper triangle of a row-major `d × d` matrix onto the
+/// other one.
+fn mirror<const FROM_LOWER: bool>(a: &mut [f64], d: usize) {
     // In 32 × 32 tiles, so that the strided writes stay in cache.
     const T: usize = 32;
     for i0 in (0..d).step_by(T) {
         for j0 in (0..=i0).step_by(T) {
             for i in i0..(i0 + T).min(d) {
                 for j in j0..(j0 + T).min(i) {
-                    a[j * d + i] = a[i * d + j];
+                    if FROM_LOWER {
+                        a[j * d + i] = a[i * d + j];
+                    } else {
+                        a[i * d + j] = a[j * d + i];
+                    }
                 }
             }
         }
     }
 }
 
-/// Sequential statistics of one block of rows (`n ≥ 1`); only the lower triangle of the
-/// scatter matrix is filled.
-fn block_moments(x: &[f64], n: usize, d: usize, par: Par) -> Moments {
+/// Sequential statistics of one block of rows (`n ≥ 1`).
+///
+/// Errors: the `d × d` matrix cannot be allocated (Memory).
+fn block_moments(x: &[f64], n: usize, d: usize, par: Par) -> Result<Moments> {
     // Shift: mean of the first rows, close to the block mean for any reasonable data.
     let ns = n.min(SHIFT_ROWS);
     let mut shift = vec![0.0; d];
@@ -272,9 +315,9 @@ fn block_moments(x: &[f64], n: usize, d: usize, par: Par) -> Moments {
 
     // Lower half of Σ yyᵀ (column-major d × d; symmetric, so row-major is the transpose) and
     // Σ y over the shifted rows y = x - shift.
-    let mut gram = vec![0.0; d * d];
+    let mut gram = buffer::try_zeroed_f64(scatter_len(d)?, "the scatter matrix")?;
     let mut colsum = vec![0.0; d];
-    let mut buf = vec![0.0; SUB_BLOCK_ROWS.min(n) * d];
+    let mut buf = buffer::try_zeroed_f64(SUB_BLOCK_ROWS.min(n) * d, "a block of centred rows")?;
     for (b, rows) in x.chunks(SUB_BLOCK_ROWS * d).enumerate() {
         let nb = rows.len() / d;
         let y = &mut buf[..rows.len()];
@@ -303,23 +346,25 @@ fn block_moments(x: &[f64], n: usize, d: usize, par: Par) -> Moments {
         );
     }
 
-    // gram is column-major lower: element (i, j), i ≥ j, at j * d + i. Subtract n m mᵀ with
-    // m = colsum / n and write the row-major lower triangle, then mirror it.
+    // gram is column-major lower: element (i, j), i ≥ j, at j * d + i, which is the row-major
+    // upper triangle of the symmetric result. Subtract n m mᵀ with m = colsum / n in place,
+    // then mirror onto the lower triangle.
     let nf = n as f64;
     let m: Vec<f64> = colsum.iter().map(|c| c / nf).collect();
-    let mut scatter = vec![0.0; d * d];
     for j in 0..d {
+        let row = &mut gram[j * d..(j + 1) * d];
         for i in j..d {
-            scatter[i * d + j] = gram[j * d + i] - nf * m[i] * m[j];
+            row[i] -= nf * m[i] * m[j];
         }
     }
+    mirror::<false>(&mut gram, d);
     let mean = shift.iter().zip(&m).map(|(s, mi)| s + mi).collect();
-    Moments {
+    Ok(Moments {
         dim: d,
         count: n as u64,
         mean,
-        scatter,
-    }
+        scatter: gram,
+    })
 }
 
 #[cfg(test)]
@@ -418,8 +463,8 @@ mod tests {
         let (n, d) = (3001, 6);
         let x = values(n * d, 3);
         let whole = Moments::from_rows(&x, n, d).unwrap();
-        let mut acc = Moments::new(d);
-        let mut other = Moments::new(d);
+        let mut acc = Moments::new(d).unwrap();
+        let mut other = Moments::new(d).unwrap();
         acc.update(&x[..1000 * d], 1000).unwrap();
         acc.update(&x[1000 * d..1000 * d], 0).unwrap();
         other.update(&x[1000 * d..2500 * d], 1500).unwrap();
@@ -453,6 +498,31 @@ mod tests {
     }
 
     #[test]
+    fn impossible_sizes_are_memory_errors() {
+        // A d × d scatter matrix beyond memory or beyond usize: refused before any work.
+        for dim in [10_000_000usize, 1 << 30, 1 << 32, usize::MAX] {
+            assert!(matches!(Moments::new(dim), Err(Error::Memory(_))), "{dim}");
+        }
+        let d = 3_000_000;
+        let x = vec![0.0; d];
+        assert!(matches!(covariance(&x, 1, d), Err(Error::Memory(_))));
+        assert!(matches!(
+            Moments::from_rows(&x, 1, d),
+            Err(Error::Memory(_))
+        ));
+        // Stored moments whose dimension squared overflows.
+        assert!(matches!(
+            Moments::from_parts(1 << 32, 1, vec![], vec![]),
+            Err(Error::Shape(_))
+        ));
+        // A row count times dimension that overflows is a shape mismatch, not a panic.
+        assert!(matches!(
+            covariance(&[1.0], 1 << 33, 1 << 33),
+            Err(Error::Shape(_))
+        ));
+    }
+
+    #[test]
     fn errors() {
         assert!(matches!(covariance(&[], 0, 3), Err(Error::Shape(_))));
         assert!(matches!(
@@ -463,9 +533,15 @@ mod tests {
             covariance(&[1.0, f64::NAN], 1, 2),
             Err(Error::NonFinite(_))
         ));
-        assert!(matches!(Moments::new(2).covariance(), Err(Error::Shape(_))));
-        let mut a = Moments::new(2);
-        assert!(matches!(a.merge(&Moments::new(3)), Err(Error::Shape(_))));
+        assert!(matches!(
+            Moments::new(2).unwrap().covariance(),
+            Err(Error::Shape(_))
+        ));
+        let mut a = Moments::new(2).unwrap();
+        assert!(matches!(
+            a.merge(&Moments::new(3).unwrap()),
+            Err(Error::Shape(_))
+        ));
         assert!(matches!(
             Moments::from_parts(2, 1, vec![0.0; 2], vec![1.0, 2.0, 3.0, 4.0]),
             Err(Error::InvalidArgument(_))

@@ -96,6 +96,7 @@ fn prefix_error(err: Error, prefix: &str) -> Error {
         Error::Shape(m) => Error::Shape(format!("{prefix}{m}")),
         Error::NonFinite(m) => Error::NonFinite(format!("{prefix}{m}")),
         Error::Numerical(m) => Error::Numerical(format!("{prefix}{m}")),
+        Error::Memory(m) => Error::Memory(format!("{prefix}{m}")),
     }
 }
 

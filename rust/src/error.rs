@@ -15,6 +15,10 @@ pub enum Error {
     /// A numerical failure (e.g. an eigensolver that did not converge).
     #[error("{0}")]
     Numerical(String),
+    /// A buffer too large to allocate: a size that overflows, exceeds the machine's memory,
+    /// or an allocation that failed. The message names the sizes.
+    #[error("{0}")]
+    Memory(String),
 }
 
 pub type Result<T> = std::result::Result<T, Error>;

@@ -253,6 +253,7 @@ pub fn validate_sos(sos: &[Sos]) -> Result<()> {
 pub fn default_padlen(sos: &[Sos]) -> usize {
     let zb = sos.iter().filter(|s| s[2] == 0.0).count();
     let za = sos.iter().filter(|s| s[5] == 0.0).count();
+    // (Sections are 48 bytes each: the count is far below usize::MAX / 6.)
     3 * (2 * sos.len() + 1 - zb.min(za))
 }
 
@@ -319,7 +320,7 @@ pub fn sosfiltfilt_rows(
     padlen: Option<usize>,
 ) -> Result<Vec<f64>> {
     validate_sos(sos)?;
-    if x.len() != n_rows * n {
+    if Some(x.len()) != n_rows.checked_mul(n) {
         return Err(Error::Shape(format!(
             "x has {} values, expected {n_rows} x {n}",
             x.len()

@@ -137,7 +137,7 @@ pub fn kmeans(
                 params.n_init
             )));
         }
-        if init.len() != k * d {
+        if Some(init.len()) != k.checked_mul(d) {
             return Err(Error::Shape(format!(
                 "init has {} values, expected k={k} rows x {d} columns",
                 init.len()
@@ -194,13 +194,18 @@ pub fn predict(
     k: usize,
 ) -> Result<(Vec<u32>, Vec<f64>)> {
     check_data(x, n, d, "X")?;
-    if k == 0 || centers.len() != k * d {
+    if k == 0 || Some(centers.len()) != k.checked_mul(d) {
         return Err(Error::Shape(format!(
             "centers must be a non-empty k x {d} matrix, got {} values for k={k}",
             centers.len()
         )));
     }
     check_data(centers, k, d, "centers")?;
+    if k > MAX_ROWS {
+        return Err(Error::Memory(format!(
+            "centers has {k} rows; at most {MAX_ROWS} centres are supported"
+        )));
+    }
     let panel = Panel::from_centers(centers, k, d);
     let ch = crate::kmeanspp::CHUNK;
     let mut labels = vec![0u32; n];
@@ -229,8 +234,16 @@ pub fn predict(
     Ok((labels, dist))
 }
 
-/// Check `1 ≤ k ≤ n` and `1 ≤ n_local_trials ≤ 64`.
+/// Largest number of rows (labels are 32-bit).
+pub const MAX_ROWS: usize = u32::MAX as usize;
+
+/// Check `1 ≤ k ≤ n ≤ MAX_ROWS` and `1 ≤ n_local_trials ≤ 64`.
 pub fn check_k_and_trials(k: usize, n: usize, trials: usize) -> Result<()> {
+    if n > MAX_ROWS {
+        return Err(Error::Memory(format!(
+            "X has {n} rows; k-means handles at most {MAX_ROWS} rows"
+        )));
+    }
     if k < 1 || k > n {
         return Err(Error::InvalidArgument(format!(
             "k must be between 1 and the number of rows of X ({n}), got {k}"
@@ -261,7 +274,7 @@ pub fn data_stats(x: &[f64], n: usize, d: usize, name: &str) -> Result<DataStats
             "{name} is empty (shape {n}x{d}); need at least one row and one column"
         )));
     }
-    if x.len() != n * d {
+    if Some(x.len()) != n.checked_mul(d) {
         return Err(Error::Shape(format!(
             "{name} has {} values, expected {n} rows x {d} columns",
             x.len()
@@ -356,7 +369,7 @@ fn check_data(x: &[f64], n: usize, d: usize, name: &str) -> Result<()> {
             "{name} is empty (shape {n}x{d}); need at least one row and one column"
         )));
     }
-    if x.len() != n * d {
+    if Some(x.len()) != n.checked_mul(d) {
         return Err(Error::Shape(format!(
             "{name} has {} values, expected {n} rows x {d} columns",
             x.len()

@@ -183,7 +183,12 @@ impl<'a> State<'a> {
         let panel = &self.panel;
         // The first M-step needs the sums of every cluster: gather them per chunk while the
         // rows are in cache, when the per-chunk partials fit in memory.
-        let fused = n.div_ceil(CHUNK) * k * d * 8 <= PARTIAL_BYTES;
+        let fused = n
+            .div_ceil(CHUNK)
+            .saturating_mul(k)
+            .saturating_mul(d)
+            .saturating_mul(8)
+            <= PARTIAL_BYTES;
         let parts: Vec<Option<(Vec<f64>, Vec<u64>)>> = self
             .labels
             .par_chunks_mut(CHUNK)
@@ -562,7 +567,7 @@ impl<'a> State<'a> {
     /// Sums and counts from scratch (first M-step): per-chunk partials added in chunk order.
     fn fresh_sums(&mut self) {
         let (x, d, k, n) = (self.x, self.d, self.k, self.n);
-        let max_chunks = (PARTIAL_BYTES / (k * d * 8).max(1)).max(1);
+        let max_chunks = (PARTIAL_BYTES / k.saturating_mul(d).saturating_mul(8).max(1)).max(1);
         let rows = CHUNK.max(n.div_ceil(max_chunks));
         let parts: Vec<(Vec<f64>, Vec<u64>)> = self
             .labels

@@ -8,6 +8,7 @@
 
 use rayon::prelude::*;
 
+use crate::buffer;
 use crate::checks::first_non_finite;
 use crate::{Error, Result};
 
@@ -63,6 +64,12 @@ fn check(values: &[f64], channels: usize, starts: &[f64], ends: &[f64], n: usize
     Ok(())
 }
 
+/// Length `channels * n` of one output row, checked: it must not overflow and a row must fit
+/// in memory (also when there are no segments, so that the output shape is representable).
+pub fn output_row(channels: usize, n: usize) -> Result<usize> {
+    buffer::elements::<f64>(&[channels, n], "one resampled segment")
+}
+
 /// Resamples each segment to `n` samples per channel. `values` is `(frames, channels)`
 /// row-major; returns `(n_segments, channels * n)` row-major, channel-major within a row. No
 /// segments gives an empty result.
@@ -74,10 +81,14 @@ pub fn resample_segments(
     n: usize,
 ) -> Result<Vec<f64>> {
     check(values, channels, starts, ends, n)?;
-    let row = channels * n;
-    let mut out = crate::buffer::zeroed_f64(starts.len() * row);
+    let row = output_row(channels, n)?;
+    let len = buffer::elements::<f64>(&[starts.len(), channels, n], "the resampled segments")?;
+    let mut out = buffer::try_zeroed_f64(len, "the resampled segments")?;
+    if out.is_empty() {
+        return Ok(out);
+    }
     let kernel = pick_kernel(channels);
-    out.par_chunks_mut(row * SEGMENTS_PER_TASK)
+    out.par_chunks_mut(row.saturating_mul(SEGMENTS_PER_TASK))
         .enumerate()
         .for_each(|(k, chunk)| {
             let first = k * SEGMENTS_PER_TASK;
@@ -379,6 +390,30 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn sizes_that_overflow_or_exceed_memory_are_refused() {
+        let values = vec![0.0; 40];
+        let huge = [
+            (1usize << 62) + 1,
+            1 << 62,
+            (1 << 61) + 1,
+            1 << 61,
+            usize::MAX,
+            1_000_000_000_000,
+        ];
+        for n in huge {
+            for segments in [0usize, 1, 3] {
+                let s = vec![0.0; segments];
+                let e = vec![5.0; segments];
+                let err = resample_segments(&values, 4, &s, &e, n).unwrap_err();
+                assert!(matches!(err, Error::Memory(_)), "n {n}: {err:?}");
+            }
+            assert!(matches!(output_row(4, n), Err(Error::Memory(_))));
+        }
+        // Just representable: the check passes, the numbers are the product.
+        assert_eq!(output_row(4, 1000).unwrap(), 4000);
     }
 
     #[test]

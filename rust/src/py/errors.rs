@@ -1,6 +1,6 @@
 //! Mapping of core errors to Python exceptions.
 
-use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyMemoryError, PyRuntimeError, PyValueError};
 use pyo3::PyErr;
 
 use crate::Error;
@@ -12,6 +12,7 @@ impl From<Error> for PyErr {
                 PyValueError::new_err(msg)
             }
             Error::Numerical(msg) => PyRuntimeError::new_err(msg),
+            Error::Memory(msg) => PyMemoryError::new_err(msg),
         }
     }
 }

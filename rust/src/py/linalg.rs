@@ -17,6 +17,8 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
+use super::args::{n_threads_arg, opt_usize_in, Int, Real};
+use crate::buffer::try_copy;
 use crate::covariance::Moments;
 use crate::kmeans::{self as km, KMeansParams};
 use crate::kmeanspp::{self, Rng};
@@ -44,6 +46,18 @@ impl Matrix<'_> {
             None => Cow::Owned(view.iter().copied().collect()),
         }
     }
+}
+
+/// A numpy array of a real dtype other than float64 (bool, integers, floats) converted with
+/// ``astype(numpy.float64)``; anything else unchanged (then checked by [`matrix`]).
+fn real_as_f64<'py>(obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    if let Ok(arr) = obj.cast::<PyUntypedArray>() {
+        let dtype = arr.dtype();
+        if !dtype.is_equiv_to(&numpy::dtype::<f64>(obj.py())) && b"biuf".contains(&dtype.kind()) {
+            return obj.call_method1("astype", ("float64",));
+        }
+    }
+    Ok(obj.clone())
 }
 
 /// `obj` as a 2-D float64 numpy array; `what` describes the expected content.
@@ -80,9 +94,6 @@ fn matrix<'py>(obj: &Bound<'py, PyAny>, name: &str, what: &str) -> PyResult<Matr
 fn in_pool<T: Send>(n_threads: Option<usize>, f: impl FnOnce() -> T + Send) -> PyResult<T> {
     match n_threads {
         None => Ok(f()),
-        Some(0) => Err(PyValueError::new_err(
-            "n_threads must be ≥ 1 (or None for all cores)",
-        )),
         Some(t) => {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(t)
@@ -121,8 +132,9 @@ fn square<'py>(
 fn covariance<'py>(
     py: Python<'py>,
     x: &Bound<'py, PyAny>,
-    n_threads: Option<usize>,
+    n_threads: Option<Int>,
 ) -> PyResult<VecMat<'py>> {
+    let n_threads = n_threads_arg(n_threads)?;
     let m = matrix(x, "X", "rows are observations")?;
     let (n, d) = (m.rows, m.cols);
     let values = m.values();
@@ -162,24 +174,25 @@ impl CovarianceAccumulator {
 impl CovarianceAccumulator {
     #[new]
     #[pyo3(signature = (dim=None))]
-    fn new(dim: Option<usize>) -> PyResult<Self> {
-        match dim {
-            Some(0) => Err(PyValueError::new_err("dim must be ≥ 1")),
-            _ => Ok(Self {
-                inner: dim.map(Moments::new),
-            }),
-        }
+    fn new(dim: Option<Int>) -> PyResult<Self> {
+        let dim = opt_usize_in(dim, "dim", 1, usize::MAX, "the dimension of the rows")?;
+        Ok(Self {
+            inner: dim.map(Moments::new).transpose()?,
+        })
     }
 
-    /// Add the rows of ``x`` ``(n, d)``; ``n = 0`` is allowed and changes nothing.
+    /// Add the rows of ``x`` ``(n, d)``; ``n = 0`` is allowed and changes nothing. An array of
+    /// another real dtype (bool, integers, floats) is converted to float64 first.
     #[pyo3(signature = (x, *, n_threads=None))]
     fn update(
         &mut self,
         py: Python<'_>,
         x: &Bound<'_, PyAny>,
-        n_threads: Option<usize>,
+        n_threads: Option<Int>,
     ) -> PyResult<()> {
-        let m = matrix(x, "X", "rows are observations")?;
+        let n_threads = n_threads_arg(n_threads)?;
+        let x = real_as_f64(x)?;
+        let m = matrix(&x, "X", "rows are observations")?;
         let (n, d) = (m.rows, m.cols);
         if d == 0 {
             return Err(PyValueError::new_err(format!(
@@ -197,15 +210,20 @@ impl CovarianceAccumulator {
         Ok(())
     }
 
-    /// Add the statistics of another accumulator (``other`` is unchanged).
-    fn merge(&mut self, other: PyRef<'_, CovarianceAccumulator>) -> PyResult<()> {
-        let Some(o) = &other.inner else { return Ok(()) };
-        self.dim_mismatch(o.dim(), "other")?;
-        match &mut self.inner {
-            Some(acc) => acc.merge(o)?,
-            None => self.inner = Some(o.clone()),
+    /// Add the statistics of another accumulator (``other`` is unchanged; ``acc.merge(acc)``
+    /// merges a copy, doubling every row's weight).
+    fn merge(slf: &Bound<'_, Self>, other: &Bound<'_, Self>) -> PyResult<()> {
+        if slf.is(other) {
+            let copy = slf
+                .try_borrow()?
+                .inner
+                .as_ref()
+                .map(Moments::try_clone)
+                .transpose()?;
+            return slf.try_borrow_mut()?.merge_moments(copy.as_ref());
         }
-        Ok(())
+        let theirs = other.try_borrow()?;
+        slf.try_borrow_mut()?.merge_moments(theirs.inner.as_ref())
     }
 
     /// Number of rows seen.
@@ -224,14 +242,15 @@ impl CovarianceAccumulator {
     #[getter]
     fn mean<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let m = self.nonempty()?;
-        Ok(m.mean().to_vec().into_pyarray(py))
+        Ok(try_copy(m.mean(), "the mean")?.into_pyarray(py))
     }
 
     /// Scatter matrix ``Σ (x - mean)(x - mean)ᵀ``, ``(d, d)`` (a copy).
     #[getter]
     fn scatter<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let m = self.nonempty()?;
-        Ok(square(py, m.scatter().to_vec(), m.dim(), m.dim()))
+        let scatter = try_copy(m.scatter(), "the scatter matrix")?;
+        Ok(square(py, scatter, m.dim(), m.dim()))
     }
 
     /// Covariance with divisor N, ``(d, d)``.
@@ -257,8 +276,8 @@ impl CovarianceAccumulator {
             Some(m) => (
                 m.dim(),
                 m.count(),
-                m.mean().to_vec().into_pyarray(py),
-                m.scatter().to_vec().into_pyarray(py),
+                try_copy(m.mean(), "the mean")?.into_pyarray(py),
+                try_copy(m.scatter(), "the scatter matrix")?.into_pyarray(py),
             )
                 .into_pyobject(py),
         }
@@ -269,13 +288,26 @@ impl CovarianceAccumulator {
             self.inner = None;
             return Ok(());
         }
-        let (dim, count, mean, scatter): (usize, u64, Vec<f64>, Vec<f64>) = state.extract()?;
+        let (dim, count, mean, scatter): (Int, Int, Vec<f64>, Vec<f64>) = state.extract()?;
+        let dim = dim.usize_in("dim", 1, usize::MAX, "the dimension of the rows")?;
+        let count = count.in_range("count", 0, i64::MAX, "the number of rows")? as u64;
         self.inner = Some(Moments::from_parts(dim, count, mean, scatter)?);
         Ok(())
     }
 }
 
 impl CovarianceAccumulator {
+    /// Add `other`'s statistics (nothing for `None`).
+    fn merge_moments(&mut self, other: Option<&Moments>) -> PyResult<()> {
+        let Some(o) = other else { return Ok(()) };
+        self.dim_mismatch(o.dim(), "other")?;
+        match &mut self.inner {
+            Some(acc) => acc.merge(o)?,
+            None => self.inner = Some(o.try_clone()?),
+        }
+        Ok(())
+    }
+
     fn nonempty(&self) -> PyResult<&Moments> {
         match &self.inner {
             Some(m) if m.count() > 0 => Ok(m),
@@ -289,7 +321,8 @@ impl CovarianceAccumulator {
 /// Eigenvalues (descending) and eigenvectors (columns) of the symmetric matrix ``a``.
 #[pyfunction]
 #[pyo3(signature = (a, *, k=None))]
-fn eigh<'py>(py: Python<'py>, a: &Bound<'py, PyAny>, k: Option<usize>) -> PyResult<VecMat<'py>> {
+fn eigh<'py>(py: Python<'py>, a: &Bound<'py, PyAny>, k: Option<Int>) -> PyResult<VecMat<'py>> {
+    let k = opt_usize_in(k, "k", 1, usize::MAX, "leading eigenpairs to return")?;
     let m = matrix(a, "K", "a symmetric matrix")?;
     if m.rows != m.cols {
         return Err(PyValueError::new_err(format!(
@@ -342,6 +375,16 @@ impl KMeansResult {
     }
 }
 
+fn local_trials_arg(n_local_trials: Option<Int>) -> PyResult<Option<usize>> {
+    opt_usize_in(
+        n_local_trials,
+        "n_local_trials",
+        1,
+        kmeanspp::MAX_LOCAL_TRIALS,
+        "candidates per seeding step",
+    )
+}
+
 fn labels_i64(labels: Vec<u32>) -> Vec<i64> {
     labels.into_iter().map(i64::from).collect()
 }
@@ -349,22 +392,28 @@ fn labels_i64(labels: Vec<u32>) -> Vec<i64> {
 /// k-means++ seeding then Lloyd iterations, best of ``n_init`` runs.
 #[pyfunction]
 #[pyo3(signature = (
-    x, k, *, n_init=1, max_iter=300, tol=1e-4, seed=None, init=None, n_local_trials=None,
-    n_threads=None
+    x, k, *, n_init=Int::Small(1), max_iter=Int::Small(300), tol=Real(1e-4), seed=None,
+    init=None, n_local_trials=None, n_threads=None
 ))]
 #[allow(clippy::too_many_arguments)]
 fn kmeans(
     py: Python<'_>,
     x: &Bound<'_, PyAny>,
-    k: usize,
-    n_init: usize,
-    max_iter: usize,
-    tol: f64,
+    k: Int,
+    n_init: Int,
+    max_iter: Int,
+    tol: Real,
     seed: Option<&Bound<'_, PyAny>>,
     init: Option<&Bound<'_, PyAny>>,
-    n_local_trials: Option<usize>,
-    n_threads: Option<usize>,
+    n_local_trials: Option<Int>,
+    n_threads: Option<Int>,
 ) -> PyResult<KMeansResult> {
+    let k = k.usize_in("k", 1, usize::MAX, "the number of clusters")?;
+    let n_init = n_init.usize_in("n_init", 1, usize::MAX, "independent seedings")?;
+    let max_iter = max_iter.usize_in("max_iter", 1, usize::MAX, "Lloyd iterations per run")?;
+    let tol = tol.0;
+    let n_local_trials = local_trials_arg(n_local_trials)?;
+    let n_threads = n_threads_arg(n_threads)?;
     let m = matrix(x, "X", "rows are observations")?;
     let (n, d) = (m.rows, m.cols);
     let seed = seed.map(seed_arg).transpose()?.unwrap_or(0);
@@ -407,8 +456,9 @@ fn kmeans_predict<'py>(
     py: Python<'py>,
     x: &Bound<'py, PyAny>,
     centers: &Bound<'py, PyAny>,
-    n_threads: Option<usize>,
+    n_threads: Option<Int>,
 ) -> PyResult<(LabelsArray<'py>, Bound<'py, PyArray1<f64>>)> {
+    let n_threads = n_threads_arg(n_threads)?;
     let m = matrix(x, "X", "rows are observations")?;
     let c = matrix(centers, "centers", "one centre per row")?;
     if c.cols != m.cols {
@@ -431,11 +481,14 @@ fn kmeans_predict<'py>(
 fn kmeans_plusplus<'py>(
     py: Python<'py>,
     x: &Bound<'py, PyAny>,
-    k: usize,
+    k: Int,
     seed: Option<&Bound<'py, PyAny>>,
-    n_local_trials: Option<usize>,
-    n_threads: Option<usize>,
+    n_local_trials: Option<Int>,
+    n_threads: Option<Int>,
 ) -> PyResult<(Bound<'py, PyArray2<f64>>, LabelsArray<'py>)> {
+    let k = k.usize_in("k", 1, usize::MAX, "the number of seeds")?;
+    let n_local_trials = local_trials_arg(n_local_trials)?;
+    let n_threads = n_threads_arg(n_threads)?;
     let m = matrix(x, "X", "rows are observations")?;
     let (n, d) = (m.rows, m.cols);
     let seed = seed.map(seed_arg).transpose()?.unwrap_or(0);

@@ -2,6 +2,7 @@
 
 use pyo3::prelude::*;
 
+mod args;
 mod dtw;
 mod errors;
 mod linalg;

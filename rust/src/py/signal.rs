@@ -8,7 +8,7 @@
 
 use std::borrow::Cow;
 
-use numpy::ndarray::{ArrayD, IxDyn};
+use numpy::ndarray::{Array2, ArrayD, IxDyn};
 use numpy::{
     IntoPyArray, PyArray1, PyArray2, PyArrayDescrMethods, PyArrayDyn, PyArrayMethods,
     PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods,
@@ -16,6 +16,7 @@ use numpy::{
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 
+use super::args::{opt_usize_in, Int, Real};
 use crate::filter::{self, Sos};
 use crate::{clock, gradient, resample, seg1, zvc};
 
@@ -146,16 +147,18 @@ fn sos_arg(obj: &Bound<'_, PyAny>) -> PyResult<Vec<Sos>> {
         .collect())
 }
 
-fn padlen_arg(padlen: Option<i64>) -> PyResult<Option<usize>> {
-    match padlen {
-        Some(p) if p < 0 => Err(PyValueError::new_err(format!(
-            "padlen must be >= 0 (samples of odd extension at each end), got {p}"
-        ))),
-        p => Ok(p.map(|p| p as usize)),
-    }
+fn padlen_arg(padlen: Option<Int>) -> PyResult<Option<usize>> {
+    opt_usize_in(
+        padlen,
+        "padlen",
+        0,
+        usize::MAX,
+        "samples of odd extension at each end",
+    )
 }
 
-fn min_change_arg(min_change: f64) -> PyResult<f64> {
+fn min_change_arg(min_change: Real) -> PyResult<f64> {
+    let min_change = min_change.0;
     if !(min_change.is_finite() && min_change >= 0.0) {
         return Err(PyValueError::new_err(format!(
             "min_change must be a finite number >= 0, got {min_change}"
@@ -178,15 +181,11 @@ fn frames_channels(shape: &[usize]) -> (usize, usize) {
 #[pyfunction]
 fn butter_sos<'py>(
     py: Python<'py>,
-    order: i64,
-    cutoff: f64,
+    order: Int,
+    cutoff: Real,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    if order < 1 {
-        return Err(PyValueError::new_err(format!(
-            "order must be an integer >= 1, got {order}"
-        )));
-    }
-    let sos = filter::butter_sos(order as usize, cutoff)?;
+    let order = order.usize_in("order", 1, filter::MAX_ORDER, "the filter order")?;
+    let sos = filter::butter_sos(order, cutoff.0)?;
     let n = sos.len();
     let flat: Vec<f64> = sos.into_iter().flatten().collect();
     PyArray1::from_vec(py, flat).reshape([n, 6])
@@ -209,7 +208,7 @@ fn sosfiltfilt<'py>(
     py: Python<'py>,
     sos: &Bound<'py, PyAny>,
     x: &Bound<'py, PyAny>,
-    padlen: Option<i64>,
+    padlen: Option<Int>,
 ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let sos = sos_arg(sos)?;
     let padlen = padlen_arg(padlen)?;
@@ -236,7 +235,7 @@ fn sosfiltfilt_ragged<'py>(
     sos: &Bound<'py, PyAny>,
     values: &Bound<'py, PyAny>,
     offsets: &Bound<'py, PyAny>,
-    padlen: Option<i64>,
+    padlen: Option<Int>,
 ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
     let sos = sos_arg(sos)?;
     let padlen = padlen_arg(padlen)?;
@@ -273,11 +272,11 @@ type Crossings1<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>);
 /// Zero-velocity crossings of `velocity` `(frames, channels)` (1-D: one channel) as
 /// `(frames float64, channels int64)`, sorted by channel then frame.
 #[pyfunction]
-#[pyo3(signature = (velocity, min_change=0.0, positions=None))]
+#[pyo3(signature = (velocity, min_change=Real(0.0), positions=None))]
 fn zero_velocity_crossings<'py>(
     py: Python<'py>,
     velocity: &Bound<'py, PyAny>,
-    min_change: f64,
+    min_change: Real,
     positions: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Crossings1<'py>> {
     let v = f64_arg(velocity, "velocity", &[1, 2])?;
@@ -302,12 +301,12 @@ type Crossings3<'py> = (
 /// Zero-velocity crossings of every trial of a ragged corpus as `(trial, channel, frame)`,
 /// frames relative to each trial's first frame, sorted by trial, channel, frame.
 #[pyfunction]
-#[pyo3(signature = (velocity, offsets, min_change=0.0, positions=None))]
+#[pyo3(signature = (velocity, offsets, min_change=Real(0.0), positions=None))]
 fn zero_velocity_crossings_ragged<'py>(
     py: Python<'py>,
     velocity: &Bound<'py, PyAny>,
     offsets: &Bound<'py, PyAny>,
-    min_change: f64,
+    min_change: Real,
     positions: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Crossings3<'py>> {
     let v = f64_arg(velocity, "velocity", &[1, 2])?;
@@ -372,8 +371,9 @@ fn seg1_events<'py>(
     trial: &Bound<'py, PyAny>,
     channel: &Bound<'py, PyAny>,
     time: &Bound<'py, PyAny>,
-    window: f64,
+    window: Real,
 ) -> PyResult<Events<'py>> {
+    let window = window.0;
     let trial = i64_vec(trial, "trial")?;
     let channel = i64_vec(channel, "channel")?;
     let t = f64_arg(time, "time", &[1])?;
@@ -412,23 +412,18 @@ fn times_to_frames<'py>(
 /// Each segment `[starts[i], ends[i]]` (fractional frames) of `values` `(frames, channels)`
 /// linearly resampled to `n` points per channel: `(n_segments, channels * n)`, channel-major.
 #[pyfunction]
-#[pyo3(signature = (values, starts, ends, n=100))]
+#[pyo3(signature = (values, starts, ends, n=Int::Small(100)))]
 fn resample_segments<'py>(
     py: Python<'py>,
     values: &Bound<'py, PyAny>,
     starts: &Bound<'py, PyAny>,
     ends: &Bound<'py, PyAny>,
-    n: i64,
+    n: Int,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let v = f64_arg(values, "values", &[1, 2])?;
     let s = f64_arg(starts, "starts", &[1])?;
     let e = f64_arg(ends, "ends", &[1])?;
-    if n < 2 {
-        return Err(PyValueError::new_err(format!(
-            "n (samples per channel) must be at least 2, got {n}"
-        )));
-    }
-    let n = n as usize;
+    let n = n.usize_in("n", 2, usize::MAX, "samples per channel")?;
     let (_, channels) = frames_channels(&v.shape);
     let data = v.values();
     let data: &[f64] = &data;
@@ -438,7 +433,10 @@ fn resample_segments<'py>(
     let ends: &[f64] = &ends;
     let out = py.detach(|| resample::resample_segments(data, channels, starts, ends, n))?;
     let rows = starts.len();
-    PyArray1::from_vec(py, out).reshape([rows, channels * n])
+    let row = resample::output_row(channels, n)?;
+    Ok(Array2::from_shape_vec((rows, row), out)
+        .expect("kernel output has the announced shape")
+        .into_pyarray(py))
 }
 
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
