@@ -249,7 +249,7 @@ def primitive_histograms(
     return rows
 
 
-class PrimitiveHistogramClassifier(ClassifierMixin, BaseEstimator):  # type: ignore[misc]
+class PrimitiveHistogramClassifier(ClassifierMixin, BaseEstimator):
     """Primitives (PrimitiveModel) + a classifier of their per-trial histograms.
 
     Parameters
@@ -469,7 +469,7 @@ def dtw_matrix(
     return np.asarray(kernels.dtw_distances(q, qo, r, ro, band=band))
 
 
-class _NearestSequences(ClassifierMixin, BaseEstimator):  # type: ignore[misc]
+class _NearestSequences(ClassifierMixin, BaseEstimator):
     """k-nearest neighbours of movements under a DTW cost of per-frame features."""
 
     band: float | None
@@ -816,7 +816,7 @@ class MotionClassifier(_NearestSequences):
     def predict(self, movements: Sequence[Trial]) -> NDArray[Any]:
         """Label of each movement."""
         if self.method == "histogram":
-            return self.histogram_.predict(self._query(movements))  # type: ignore[no-any-return]
+            return self.histogram_.predict(self._query(movements))
         return super().predict(movements)
 
     def predict_proba(self, movements: Sequence[Trial]) -> NDArray[np.float64]:

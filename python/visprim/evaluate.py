@@ -200,7 +200,7 @@ def read_movements(
     *,
     period: float = DEFAULT_PERIOD,
     jobs: int | None = None,
-    on_progress: Callable[[int], None] | None = None,
+    on_progress: Callable[[int], object] | None = None,
 ) -> tuple[list[Trial | None], list[str]]:
     """Each recording as a two-arm trial (``visprim.io.read(path, arm="both")``; marker CSV
     files hold the right arm only), resampled to ``period`` seconds; ``jobs`` worker
@@ -296,7 +296,9 @@ def _confusion(classes: list[str], truth: NDArray[Any], pred: NDArray[Any]) -> N
     return m
 
 
-def _total_error_deg(model: Any, vectors: NDArray[np.float64], centers: NDArray[np.float64]):
+def _total_error_deg(
+    model: Any, vectors: NDArray[np.float64], centers: NDArray[np.float64]
+) -> tuple[float, int]:
     """Mean squared error of rebuilding ``vectors`` from their nearest of ``centers``."""
     p = model.transform(vectors)
     labels, _ = kernels.kmeans_predict(np.ascontiguousarray(p), centers)

@@ -356,7 +356,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         if client is not None or hasattr(trials, "chunk_ranges"):
             from visprim.scale import fit_corpus
 
-            return fit_corpus(self, trials, client=client, source=source)  # type: ignore[no-any-return]
+            return fit_corpus(self, trials, client=client, source=source)
         self._validate_params()
         if not _are_trials(trials):
             return self._fit_array(trials, source=source)
