@@ -215,9 +215,13 @@ def read_movements(
             if on_progress:
                 on_progress(1)
     else:
+        import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
-        with ProcessPoolExecutor(max_workers=jobs) as pool:
+        # "spawn": a forked child inherits locks held by this process's other threads
+        # (Rust thread pools, progress bars) and can hang on them.
+        spawn = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=jobs, mp_context=spawn) as pool:
             for m in pool.map(_read_one, paths, [period] * len(paths), chunksize=4):
                 results.append(m)
                 if on_progress:
