@@ -15,7 +15,7 @@ from visprim.trial import Trial
 
 @pytest.fixture(scope="module")
 def data():
-    trials = imitation_experiment(2, 4, seed=3)
+    trials = imitation_experiment(2, 4, seed=3, preset="strokes")  # the mechanics, on easy data
     model = PrimitiveModel(n_clusters=6, n_init=2, seed=0).fit(trials[:-1])
     return model, trials[-1]
 

@@ -396,7 +396,14 @@ def imitate(
     # One evaluation on the frames and a fine grid together (inverse kinematics unwraps γ and
     # α along it), put on the human's whole turns.
     n_fine = max(2, int(np.ceil((rebuild.end - rebuild.start) / PLAY_SAMPLE_S)) + 1)
-    grid = np.union1d(times[inside], np.linspace(rebuild.start, rebuild.end, n_fine))
+    frames = times[inside]
+    fine = np.linspace(rebuild.start, rebuild.end, n_fine)
+    # Fine points within a microsecond of a frame would make the grid not strictly increasing
+    # once shifted to start at 0; the frame itself stands for them.
+    after = np.clip(np.searchsorted(frames, fine), 0, frames.size - 1)
+    before = np.clip(after - 1, 0, frames.size - 1)
+    gap = np.minimum(np.abs(fine - frames[after]), np.abs(fine - frames[before]))
+    grid = np.union1d(frames, fine[gap > 1e-6])
     grid_a, grid_v = rebuild(grid)
     rows = np.searchsorted(grid, times[inside])
     rebuild.turns = _turns(grid_a[rows], human[inside])
