@@ -336,6 +336,9 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
             How to get the trials again (e.g. ``{"kind": "generated", ...}`` or
             ``{"kind": "files", "paths": [...]}``) so that ``visprim report`` can redraw the
             trial figures.
+        client : dask.distributed.Client, str or True, optional
+            Learn a lazy corpus on Dask: a client, a scheduler address, or ``True`` for a
+            local cluster (see below).
 
         Returns
         -------
