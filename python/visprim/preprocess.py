@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from visprim.features import from_angles
 from visprim.filtering import butterworth, default_padlen, lowpass_concatenated
 from visprim.ik import arm_angles_corpus
-from visprim.segment import CorpusSegmentation, seg2, segment_concatenated
+from visprim.segment import CorpusSegmentation, segment_concatenated
 from visprim.trial import Trial
 
 log = logging.getLogger(__name__)
@@ -157,20 +157,3 @@ def prepare_corpus(
         arms=trials[0].arms,
         n_short=n_short,
     )
-
-
-def seg2_partition(
-    trial: Trial,
-    *,
-    filter_order: int = 10,
-    cutoff: float = 0.25,
-    threshold: float | None = None,
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """One trial's SEG-2 partition: ``(times (T,) s, low-passed angles (T, 4) rad,
-    segments (n, 2) s)``; ``threshold=None`` tunes c on this trial from its repetitions."""
-    raw = arm_angles_corpus([trial])[0]
-    angles = lowpass_concatenated(
-        raw, np.zeros(1, dtype=np.int64), order=filter_order, cutoff=cutoff, names=[trial.name]
-    )
-    segments = seg2(trial.times, angles, repetitions=trial.repetitions, threshold=threshold)
-    return trial.times, angles, segments
