@@ -8,6 +8,13 @@ projections ``p = E_fᵀ (s − s̄)`` and the reconstructions ``s ≈ E_f p + s
 
 With divisor N, the mean squared reconstruction error over the training vectors equals the
 sum of the dropped eigenvalues ``Σ_{i > f} λ_i`` exactly (the projection error of Table 1).
+
+Fewer vectors than dimensions (N ≤ d, common with two-arm 1200-D vectors of a few hundred
+segments): K has rank below N and a null space of dimension at least d − N + 1, a huge
+repeated eigenvalue 0 that a d × d eigensolver handles slowly. :func:`fit_pca` then
+decomposes the N × N Gram matrix ``G = (1/N) X̃ X̃ᵀ`` instead (same non-zero eigenvalues;
+eigenvectors ``X̃ᵀ u / √(N λ)``) and completes the basis with an orthonormal basis of the
+null space (eigenvalue 0).
 """
 
 from __future__ import annotations
@@ -109,6 +116,8 @@ def fit_pca(vectors: ArrayLike) -> PCABasis:
         raise ValueError(f"vectors must be a 2-D array (N, d), got shape {x.shape}")
     if x.shape[0] < 2:
         raise ValueError(f"PCA needs at least 2 vectors, got {x.shape[0]}")
+    if x.shape[0] <= x.shape[1]:
+        return _fit_pca_gram(x)
     mean, cov = kernels.covariance(x)
     values, vecs = kernels.eigh(cov)
     return PCABasis(
@@ -117,6 +126,37 @@ def fit_pca(vectors: ArrayLike) -> PCABasis:
         eigenvectors=np.asarray(vecs),
         n_vectors=int(x.shape[0]),
     )
+
+
+def _fit_pca_gram(x: NDArray[np.float64]) -> PCABasis:
+    """:func:`fit_pca` through the N × N Gram matrix, for N ≤ d (see the module docstring)."""
+    n, d = x.shape
+    mean = x.mean(axis=0)
+    xc = x - mean
+    gram = (xc @ xc.T) / n
+    gram = 0.5 * (gram + gram.T)  # exactly symmetric for the kernel's check
+    g_values, u = kernels.eigh(gram)
+    g_values = np.asarray(g_values)
+    # Eigenvalues at rounding level of the largest are the null space (the centred rows
+    # sum to zero, so rank ≤ N − 1).
+    tol = max(n, d) * np.finfo(np.float64).eps * max(float(g_values[0]), 0.0)
+    r = int(np.count_nonzero(g_values > tol))
+    vecs = np.empty((d, d))
+    if r:
+        v = xc.T @ np.asarray(u)[:, :r] / np.sqrt(n * g_values[:r])
+        vecs[:, :r], _ = np.linalg.qr(v)  # orthonormal to rounding already; QR tidies it
+        # QR may flip signs: rebuild each column's sign from the Gram eigenvector.
+        flip = np.sum(vecs[:, :r] * v, axis=0) < 0
+        vecs[:, :r][:, flip] *= -1.0
+    if r < d:
+        q, _ = np.linalg.qr(vecs[:, :r] if r else np.zeros((d, 0)), mode="complete")
+        vecs[:, r:] = q[:, r:]
+    # The kernel's sign convention: each column's component of largest |value| positive.
+    top = vecs[np.argmax(np.abs(vecs), axis=0), np.arange(d)]
+    vecs *= np.where(top < 0, -1.0, 1.0)
+    values = np.zeros(d)
+    values[:r] = g_values[:r]
+    return PCABasis(mean=mean, eigenvalues=values, eigenvectors=vecs, n_vectors=int(n))
 
 
 def fit_pca_chunks(chunks: Iterable[ArrayLike]) -> PCABasis:
