@@ -13,7 +13,9 @@ from visprim.classify import (
     arm_directions,
     primitive_coordinates,
     reconstructed_directions,
+    segment_descriptions,
 )
+from visprim.model import PrimitiveModel
 from visprim.trial import Trial
 
 SMALL_MODEL = {"n_samples": 20, "n_components": 5, "n_clusters": 4, "n_init": 1}
@@ -58,6 +60,10 @@ def test_dtw_baseline_and_feature_shapes() -> None:
     np.testing.assert_allclose(np.linalg.norm(dirs.reshape(-1, 4, 3), axis=2), 1.0)
     clf = MotionClassifier(model_params=SMALL_MODEL).fit(train, y)
     coords = primitive_coordinates(clf.model_, [trial], clf.window_seconds_)[0]
+    # f = 5 projections and the window's mean posture (12 channels, two arms).
+    assert coords.shape == (trial.n_frames, 5 + 12)
+    paper = MotionClassifier(model_params={**SMALL_MODEL, "offsets": "turns"}).fit(train, y)
+    coords = primitive_coordinates(paper.model_, [trial], paper.window_seconds_)[0]
     assert coords.shape == (trial.n_frames, 5)
     rec = reconstructed_directions(clf.model_, [trial], clf.window_seconds_)[0]
     assert rec.shape == dirs.shape
@@ -67,6 +73,24 @@ def test_dtw_baseline_and_feature_shapes() -> None:
     flip = np.array([1.0, -1.0, -1.0])
     err = np.linalg.norm(rec[:, :3] * flip - dirs[:, :3], axis=1)
     assert np.median(err) < 0.1
+
+
+def test_segment_descriptions_keep_the_distance_of_absolute_vectors() -> None:
+    """[p, √n o] of a shape-and-posture model: with every eigenvector kept, the distance
+    between two segments' descriptions is the distance between their absolute vectors."""
+    train, _ = _data(3, seed=0)
+    params = {"n_samples": 10, "n_clusters": 3, "n_init": 1}
+    model = PrimitiveModel(n_components=60, **params).fit(train)
+    corpus = model.prepare(train[:2], tune_seg2=False)
+    sv = model.vectorize(corpus)
+    desc = segment_descriptions(model, sv)
+    absolute = PrimitiveModel(offsets="turns", n_components=5, **params)
+    raw = absolute.vectorize(corpus).vectors  # directions have no whole turns: raw curves
+    assert desc.shape == (len(sv), 60 + 12)
+    for i, j in ((0, 1), (0, len(sv) - 1)):
+        np.testing.assert_allclose(
+            np.linalg.norm(desc[i] - desc[j]), np.linalg.norm(raw[i] - raw[j]), rtol=1e-9
+        )
 
 
 def test_errors() -> None:

@@ -135,3 +135,24 @@ def test_cli_on_bandai_recordings(shared_data: Path, tmp_path: Path) -> None:
     assert float(row["dtw_baseline_accuracy"]) >= 0.5
     assert "<table>" in (out / "evaluate.html").read_text()
     assert main(["evaluate", str(tmp_path / "nothing")]) == 2
+
+
+def test_cli_methods_match_the_classifier() -> None:
+    from visprim.classify import MOTION_METHODS
+    from visprim.cli.evaluate import METHODS
+
+    assert METHODS == MOTION_METHODS
+
+
+def test_read_movements_reads_the_arm_asked_for(shared_data: Path) -> None:
+    recordings, _ = find_recordings([shared_data / "bandai_namco_ds2"])
+    two = recordings[:2]
+    right, errors = read_movements(two, arm="right", jobs=1)
+    both, _ = read_movements(two, jobs=1)
+    assert not errors
+    assert [t.arms for t in right if t is not None] == [("right",), ("right",)]
+    assert [t.arms for t in both if t is not None] == [("right", "left")] * 2
+    # The right arm of a two-arm read is the one-arm read.
+    assert right[0] is not None and both[0] is not None
+    assert right[0].markers.shape[1] == 4 and both[0].markers.shape[1] == 8
+    assert abs(right[0].markers - both[0].markers[:, :4]).max() < 1e-12

@@ -22,6 +22,7 @@ DEFAULTS = {
     "seg2_threshold": None,
     "seg2_tuning": "robust",
     "features": "directions",
+    "offsets": "mean",
     "n_samples": 100,
     "n_components": 30,
     "n_clusters": 30,

@@ -177,6 +177,15 @@ def test_parameters_are_validated_on_load(saved, tmp_path):
             PrimitiveModel.load(bad)
 
 
+def test_files_without_offsets_hold_absolute_vectors(saved, tmp_path):
+    """A file written before the ``offsets`` parameter is read as the paper's absolute
+    vectors; a file of today keeps its own setting."""
+    assert PrimitiveModel.load(saved).offsets == fitted().offsets
+    old = tmp_path / "old.npz"
+    _rewrite_header(saved, old, lambda h: h["parameters"].pop("offsets"), reseal=True)
+    assert PrimitiveModel.load(old).offsets == "turns"
+
+
 @pytest.mark.parametrize(
     "change",
     [

@@ -13,6 +13,7 @@ from visprim.vectors import (
     to_curves,
     to_vectors,
     turn_offsets,
+    vectors_from_frames,
 )
 
 TWO_PI = 2 * np.pi
@@ -212,3 +213,22 @@ def test_turn_offsets_boundaries_and_errors():
     sv = corpus_vectors([times], [np.zeros((50, 4))], [[[0.1, 0.5]]])
     with pytest.raises(ValueError, match="one per segment"):
         sv.to_trial_angles(np.zeros((2, 400)))
+
+
+def test_mean_offsets_keep_shape_apart_and_add_back_exactly():
+    rng = np.random.default_rng(3)
+    times, angles = _trial(rng, 80)
+    angles[:, 0] += 4 * TWO_PI  # whole turns are part of the mean too
+    frames = np.array([[3.0, 40.5], [20.0, 79.0]])
+    args = dict(trial=[0, 0], starts=[0.0, 0.0], ends=[1.0, 1.0], n_samples=25)
+    absolute = vectors_from_frames(angles, frames[:, 0], frames[:, 1], **args)
+    shape = vectors_from_frames(angles, frames[:, 0], frames[:, 1], offsets="mean", **args)
+    curves = to_curves(shape.vectors, 4)
+    np.testing.assert_allclose(curves.mean(axis=1), 0.0, atol=1e-12)
+    np.testing.assert_allclose(
+        shape.to_trial_angles(shape.vectors), absolute.to_trial_angles(absolute.vectors)
+    )
+    reference = _reference(np.arange(80.0), angles, frames, 25)
+    np.testing.assert_allclose(shape.offsets, to_curves(reference, 4).mean(axis=1))
+    with pytest.raises(ValueError, match="offsets must be one of"):
+        vectors_from_frames(angles, [0.0], [5.0], **{**args, "trial": [0]}, offsets="x")

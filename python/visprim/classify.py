@@ -606,20 +606,34 @@ def _windows(
         ends=end,
         n_samples=int(model.n_samples),
         periodic_channels=periodic_channels(corpus.features, len(corpus.arms)),
+        offsets=str(model.offsets),
     )
     position = np.divide(local - start, width, out=np.zeros_like(width), where=width > 0)
     return sv, corpus, np.clip(position, 0.0, 1.0)
 
 
+def segment_descriptions(model: PrimitiveModel, sv: Any) -> NDArray[np.float64]:
+    """What the model knows of each segment of ``sv``: its projection ``p`` (f values)
+    and, for a model with ``offsets="mean"``, its mean posture ``o`` (C values) scaled by
+    ``√n_samples``. A vector is its shape plus its posture repeated ``n`` times, and the
+    shape has zero mean per channel, so ``‖[p, √n o] − [p', √n o']‖`` is the distance of
+    the absolute vectors up to the PCA projection error: (N, f) or (N, f + C)."""
+    p = np.asarray(model.transform(sv.vectors))
+    if getattr(model, "offsets", "turns") != "mean":
+        return p
+    return np.hstack([p, np.sqrt(float(model.n_samples)) * sv.offsets])
+
+
 def primitive_coordinates(
     model: PrimitiveModel, trials: Sequence[Trial], window: float
 ) -> list[NDArray[np.float64]]:
-    """Each frame of each trial in the primitives' PCA space: the projection
-    ``p = E_fᵀ (s − s̄)`` of the segment vector ``s`` of the ``window`` seconds around the
-    frame (the model's per-frame features, low-passed, resampled to ``n_samples`` like a
-    training segment). One (T_i, f) array per trial."""
+    """Each frame of each trial in the primitives' space: the description
+    (:func:`segment_descriptions`: the projection ``p = E_fᵀ (s − s̄)``, and the mean
+    posture for ``offsets="mean"``) of the segment vector ``s`` of the ``window`` seconds
+    around the frame (the model's per-frame features, low-passed, resampled to
+    ``n_samples`` like a training segment). One (T_i, f) or (T_i, f + C) array per trial."""
     sv, corpus, _ = _windows(model, trials, window)
-    return np.split(model.transform(sv.vectors), corpus.offsets[1:])
+    return np.split(segment_descriptions(model, sv), corpus.offsets[1:])
 
 
 def reconstructed_directions(
@@ -752,10 +766,12 @@ class MotionClassifier(_NearestSequences):
     def _segment_projections(self, trials: list[Trial]) -> list[NDArray[np.float64]]:
         corpus = self.model_.prepare(trials, tune_seg2=False)
         f = int(self.model_.n_components)
+        if getattr(self.model_, "offsets", "turns") == "mean":
+            f += int(self.model_.n_channels)
         out = [np.zeros((1, f)) for _ in trials]  # no segment: one point at the mean
         if corpus.segmentation.n_segments:
             sv = self.model_.vectorize(corpus)
-            p = self.model_.transform(sv.vectors)
+            p = segment_descriptions(self.model_, sv)
             for i in np.unique(sv.trial):
                 out[int(i)] = p[sv.trial == i]
         return out

@@ -183,14 +183,14 @@ def find_recordings(
     return found, unlabelled
 
 
-def _read_one(path: Path, period: float) -> Trial | str:
+def _read_one(path: Path, period: float, arm: str = "both") -> Trial | str:
     """The recording as a trial, or the one-line reason it cannot be read."""
     from visprim.io import read
 
     try:
         if path.suffix.lower() == ".csv":  # the marker CSV holds one (right) arm
             return read(path, "right", resample=period)
-        return read(path, "both", resample=period)
+        return read(path, arm, resample=period)
     except ValueError as exc:  # ReadError and bad content: skip the file, say why
         return str(exc).splitlines()[0] if str(exc) else f"{path}: unreadable"
 
@@ -199,11 +199,13 @@ def read_movements(
     recordings: Sequence[Recording],
     *,
     period: float = DEFAULT_PERIOD,
+    arm: str = "both",
     jobs: int | None = None,
     on_progress: Callable[[int], object] | None = None,
 ) -> tuple[list[Trial | None], list[str]]:
-    """Each recording as a two-arm trial (``visprim.io.read(path, arm="both")``; marker CSV
-    files hold the right arm only), resampled to ``period`` seconds; ``jobs`` worker
+    """Each recording as a trial of ``arm`` (``"both"`` by default, ``"right"`` or
+    ``"left"``; marker CSV files hold the right arm only), read by
+    :func:`visprim.io.read` and resampled to ``period`` seconds; ``jobs`` worker
     processes (default: the number of cores). Returns ``(trials, errors)``: ``None`` in
     place of a recording that cannot be read, and one line per such recording."""
     paths = [r.path for r in recordings]
@@ -211,7 +213,7 @@ def read_movements(
     results: list[Trial | str] = []
     if jobs == 1 or len(paths) < 4:
         for p in paths:
-            results.append(_read_one(p, period))
+            results.append(_read_one(p, period, arm))
             if on_progress:
                 on_progress(1)
     else:
@@ -222,7 +224,8 @@ def read_movements(
         # (Rust thread pools, progress bars) and can hang on them.
         spawn = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=jobs, mp_context=spawn) as pool:
-            for m in pool.map(_read_one, paths, [period] * len(paths), chunksize=4):
+            n = len(paths)
+            for m in pool.map(_read_one, paths, [period] * n, [arm] * n, chunksize=4):
                 results.append(m)
                 if on_progress:
                     on_progress(1)
@@ -501,12 +504,14 @@ def evaluate(
     classes: Sequence[str] | None = None,
     classifier: MotionClassifier | None = None,
     period: float = DEFAULT_PERIOD,
+    arm: str = "both",
     jobs: int | None = None,
     progress: bool | None = None,
 ) -> tuple[list[BenchmarkResult], list[str]]:
     """Run the benchmark on the labelled recordings under ``sources`` (module docstring).
 
-    Returns ``(one result per benchmark, notes)``; the notes say what was left out.
+    ``arm`` is the arm(s) read from each recording (:func:`read_movements`). Returns
+    ``(one result per benchmark, notes)``; the notes say what was left out.
     """
     from tqdm.auto import tqdm
 
@@ -525,7 +530,7 @@ def evaluate(
             raise ValueError(f"no recording has one of the labels {', '.join(classes)}")
     with tqdm(total=len(recordings), desc="reading", unit="file", disable=disable) as bar:
         read_out, errors = read_movements(
-            recordings, period=period, jobs=jobs, on_progress=bar.update
+            recordings, period=period, arm=arm, jobs=jobs, on_progress=bar.update
         )
     notes.extend(errors)
     recordings = [r for r, t in zip(recordings, read_out, strict=True) if t is not None]

@@ -41,7 +41,7 @@ from visprim.pca import PCABasis, fit_pca
 from visprim.preprocess import PreparedCorpus, prepare_corpus
 from visprim.segment.seg2 import TUNINGS
 from visprim.trial import Trial
-from visprim.vectors import SegmentVectors, stretch, to_curves, vectors_from_frames
+from visprim.vectors import OFFSETS, SegmentVectors, stretch, to_curves, vectors_from_frames
 
 Source = Literal["projection", "cluster"]
 
@@ -80,6 +80,12 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         What the segmentation and the vectors use (:mod:`visprim.features`): unit upper-arm
         and forearm directions, 6 channels per arm (default), or the paper's Z-Y-Z Euler
         angles and elbow, 4 channels per arm.
+    offsets : {"mean", "turns"}
+        What each segment vector is taken relative to (:mod:`visprim.vectors`): every
+        channel's mean over the segment (default), so that primitives are shapes of
+        movement and a segment is rebuilt from its primitive placed at the segment's own
+        mean posture (C numbers per segment); or the absolute curves with only whole turns
+        of γ and α removed (the paper: a primitive also fixes where the arm is).
     n_samples : int
         Samples per channel in a segment vector (default 100; vectors are ``C n_samples``-D,
         C channels per frame: 4 or 6 per arm, see ``features``).
@@ -163,6 +169,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         seg2_threshold: float | None = None,
         seg2_tuning: str = "robust",
         features: str = "directions",
+        offsets: str = "mean",
         n_samples: int = 100,
         n_components: int = 30,
         n_clusters: int = 30,
@@ -180,6 +187,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         self.seg2_threshold = seg2_threshold
         self.seg2_tuning = seg2_tuning
         self.features = features
+        self.offsets = offsets
         self.n_samples = n_samples
         self.n_components = n_components
         self.n_clusters = n_clusters
@@ -217,6 +225,8 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
             raise bad("seg2_tuning", f"must be one of {list(TUNINGS)}")
         if self.features not in FEATURES:
             raise bad("features", f"must be one of {list(FEATURES)}")
+        if self.offsets not in OFFSETS:
+            raise bad("offsets", f"must be one of {list(OFFSETS)}")
         if not is_int(self.n_samples) or self.n_samples < 2:
             raise bad("n_samples", "must be an integer >= 2")
         d = n_channels(self.features) * int(self.n_samples)
@@ -236,10 +246,16 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
     @classmethod
     def paper(cls, **params: Any) -> PrimitiveModel:
         """The paper's method exactly: Z-Y-Z Euler angles and elbow (``features="zyz"``),
-        SEG-2's constant tuned from the repetitions (``seg2_tuning="repetitions"``), SEG-1's
-        fixed window (``seg1_adaptive=False``); other parameters as given (their defaults
-        are the paper's)."""
-        paper = {"features": "zyz", "seg2_tuning": "repetitions", "seg1_adaptive": False}
+        absolute segment vectors (``offsets="turns"``), SEG-2's constant tuned from the
+        repetitions (``seg2_tuning="repetitions"``), SEG-1's fixed window
+        (``seg1_adaptive=False``); other parameters as given (their defaults are the
+        paper's)."""
+        paper = {
+            "features": "zyz",
+            "offsets": "turns",
+            "seg2_tuning": "repetitions",
+            "seg1_adaptive": False,
+        }
         return cls(**{**paper, **params})
 
     def _check_fitted(self) -> None:
@@ -312,6 +328,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
             ends=seg.end,
             n_samples=int(self.n_samples),
             periodic_channels=periodic_channels(corpus.features, len(corpus.arms)),
+            offsets=str(self.offsets),
         )
 
     def fit(
@@ -678,6 +695,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
             ends=[end],
             n_samples=int(self.n_samples),
             periodic_channels=periodic_channels(str(self.features), a.shape[1] // 4),
+            offsets=str(self.offsets),
         )
         curve = sv.to_trial_angles(self._reconstruct_vectors(self.transform(sv.vectors), source))[0]
         mask = (t >= start) & (t <= end)
@@ -787,7 +805,8 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
                 raise ValueError(f"arms {arms!r} is not a list of one or two arms")
             if any(side not in ("right", "left") for side in arms):
                 raise ValueError(f"arms {arms!r} are not 'right'/'left'")
-            model = cls(**contents.parameters)
+            # Files written before the ``offsets`` parameter hold absolute vectors.
+            model = cls(**{"offsets": "turns", **contents.parameters})
             model.arms_ = tuple(arms)
             model._validate_params()
             tables = contents.error_tables

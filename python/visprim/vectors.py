@@ -32,6 +32,15 @@ channels), and :meth:`SegmentVectors.to_trial_angles` adds them back to put reco
 curves onto the trial's own angles (continuous with the trial's curves). β (in [0, π]) and
 the elbow flexion are not periodic and are never shifted.
 
+Posture offsets
+---------------
+With ``offsets="mean"`` each channel of a segment is shifted by its own mean over the
+segment's ``n`` samples instead (for every channel; this also removes whole turns): the
+vector then holds the *shape* of the movement, and the segment's mean posture is kept apart
+in :attr:`SegmentVectors.offsets` and added back the same way. Primitives learned from such
+vectors are movements that can be placed at any posture; a segment is rebuilt from its
+primitive and its own mean posture (C numbers, 6 per arm for bone directions).
+
 The inverse operation, :func:`stretch`, puts an ``(n, 4)`` curve back onto a segment's
 duration and evaluates it at given instants.
 """
@@ -48,6 +57,11 @@ from visprim import kernels
 
 #: Samples per degree of freedom (the paper's choice).
 DEFAULT_N_SAMPLES = 100
+
+#: What a segment vector is taken relative to (module docstring): ``"turns"``, the absolute
+#: curves with whole turns of the periodic channels removed (the paper), or ``"mean"``, each
+#: channel relative to its mean over the segment.
+OFFSETS: tuple[str, ...] = ("turns", "mean")
 
 #: Channels of the arm's angles (γ, β, α, elbow) that are angles about an unbounded axis,
 #: unwrapped in time by the IK: γ (0) and α (2). Their segments are brought to the branch
@@ -71,10 +85,11 @@ class SegmentVectors:
         Segment limits on the trial's clock.
     n_samples : int
         Samples per channel ``n``.
-    offsets : (N, channels) float array, radians
-        Whole turns (multiples of 2π) *subtracted* from each segment's channels to build its
-        vector (zero for non-periodic channels): the segment's angles on the trial's clock
-        are its vector's curves plus these offsets (:meth:`to_trial_angles`).
+    offsets : (N, channels) float array, units of the channels (radians for angles)
+        What was *subtracted* from each segment's channels to build its vector: whole turns
+        (multiples of 2π, zero for non-periodic channels) or, with ``offsets="mean"``, each
+        channel's mean over the segment. The segment's curves on the trial's clock are its
+        vector's curves plus these offsets (:meth:`to_trial_angles`).
     """
 
     vectors: NDArray[np.float64]
@@ -97,8 +112,7 @@ class SegmentVectors:
     def to_trial_angles(self, vectors: ArrayLike) -> NDArray[np.float64]:
         """Curves ``(N, n, C)`` radians of ``vectors`` ``(N, C * n)`` — one per segment, in
         this object's segment order (e.g. reconstructions of :attr:`vectors`) — with each
-        segment's whole-turn :attr:`offsets` added back, i.e. on the trial's own
-        (unwrapped) angles."""
+        segment's :attr:`offsets` added back, i.e. on the trial's own (unwrapped) angles."""
         v = np.asarray(vectors, dtype=np.float64)
         if v.shape != self.vectors.shape:
             raise ValueError(
@@ -164,6 +178,16 @@ def turn_offsets(
     return offsets
 
 
+def mean_offsets(vectors: ArrayLike, n_samples: int) -> NDArray[np.float64]:
+    """Posture offsets ``(N, C)`` of channel-major vectors ``(N, C * n)``: each channel's
+    mean over its ``n`` samples (units of the vectors)."""
+    v = np.atleast_2d(np.asarray(vectors, dtype=np.float64))
+    n = int(n_samples)
+    if v.ndim != 2 or n < 1 or v.shape[1] % n:
+        raise ValueError(f"vectors of shape {v.shape} are not (N, C * {n_samples})")
+    return v.reshape(v.shape[0], v.shape[1] // n, n).mean(axis=2)
+
+
 def vectors_from_frames(
     values: NDArray[np.float64],
     start_frames: ArrayLike,
@@ -174,6 +198,7 @@ def vectors_from_frames(
     ends: ArrayLike,
     n_samples: int = DEFAULT_N_SAMPLES,
     periodic_channels: Sequence[int] = PERIODIC_CHANNELS,
+    offsets: str = "turns",
 ) -> SegmentVectors:
     """Segment vectors of a concatenated corpus from fractional frame limits (one kernel call).
 
@@ -191,7 +216,12 @@ def vectors_from_frames(
     periodic_channels : sequence of int
         Channels brought to the branch whose segment mean lies in (−π, π] (module
         docstring); ``()`` keeps every channel as it is.
+    offsets : {"turns", "mean"}
+        What is kept apart per segment (:data:`OFFSETS`): whole turns of the periodic
+        channels (default, the paper), or every channel's mean over the segment.
     """
+    if offsets not in OFFSETS:
+        raise ValueError(f"offsets must be one of {list(OFFSETS)}, got {offsets!r}")
     values = np.ascontiguousarray(values, dtype=np.float64)
     if values.ndim != 2:
         raise ValueError(f"values must have shape (F, C), got {values.shape}")
@@ -200,10 +230,13 @@ def vectors_from_frames(
     s = np.clip(np.asarray(start_frames, dtype=np.float64), 0.0, last)
     e = np.clip(np.asarray(end_frames, dtype=np.float64), 0.0, last)
     vectors = np.asarray(kernels.resample_segments(values, s, e, n=int(n_samples)))
-    offsets = turn_offsets(vectors, int(n_samples), periodic)
-    if periodic and np.any(offsets):
+    if offsets == "mean":
+        shift = mean_offsets(vectors, int(n_samples))
+    else:
+        shift = turn_offsets(vectors, int(n_samples), periodic)
+    if np.any(shift):
         c = values.shape[1]
-        vectors = (vectors.reshape(-1, c, int(n_samples)) - offsets[:, :, None]).reshape(
+        vectors = (vectors.reshape(-1, c, int(n_samples)) - shift[:, :, None]).reshape(
             vectors.shape
         )
     return SegmentVectors(
@@ -212,7 +245,7 @@ def vectors_from_frames(
         starts=np.asarray(starts, dtype=np.float64),
         ends=np.asarray(ends, dtype=np.float64),
         n_samples=int(n_samples),
-        offsets=offsets,
+        offsets=shift,
     )
 
 

@@ -20,6 +20,7 @@ def run(args: argparse.Namespace) -> int:
             classes=classes,
             classifier=MotionClassifier(method=args.method, band=args.band),
             period=args.resample,
+            arm=args.arm,
             jobs=args.jobs,
         )
     except ValueError as exc:
@@ -34,10 +35,13 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+#: :data:`visprim.classify.MOTION_METHODS`, spelt out so that building the parser does not
+#: import scikit-learn (a test checks they agree).
+METHODS = ("combined", "frames", "coordinates", "segments", "histogram")
+
+
 def register(sub: Any) -> None:
     """Add the command to ``sub`` (from :meth:`argparse.ArgumentParser.add_subparsers`)."""
-    from visprim.classify import MOTION_METHODS
-
     p = sub.add_parser(
         "evaluate",
         help="benchmark primitives on labelled recordings (leave one group out)",
@@ -57,7 +61,7 @@ def register(sub: Any) -> None:
     p.add_argument("--classes", default=None, help="comma-separated labels to keep (default: all)")
     p.add_argument(
         "--method",
-        choices=MOTION_METHODS,
+        choices=METHODS,
         default="combined",
         help="MotionClassifier method (default combined; see help(visprim.MotionClassifier))",
     )
@@ -66,6 +70,12 @@ def register(sub: Any) -> None:
         type=float,
         default=None,
         help="Sakoe-Chiba band of the DTW, fraction of the length (default: none)",
+    )
+    p.add_argument(
+        "--arm",
+        choices=("right", "left", "both"),
+        default="both",
+        help="arms to read and model (default both; marker CSV files hold the right arm)",
     )
     p.add_argument(
         "--resample", type=float, default=0.034, help="frame period in seconds (default 0.034)"
