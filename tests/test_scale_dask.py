@@ -28,7 +28,8 @@ PARAMS = dict(n_components=12, n_clusters=8, n_init=3, seed=4)
 
 
 def covariance(m: PrimitiveModel) -> np.ndarray:
-    return (m.eigenvectors_ * m.eigenvalues_) @ m.eigenvectors_.T
+    e = m.eigenvectors_  # eigenvalues beyond the stored eigenvectors are 0
+    return (e * m.eigenvalues_[: e.shape[1]]) @ e.T
 
 
 def assert_close_fit(a: PrimitiveModel, b: PrimitiveModel) -> None:

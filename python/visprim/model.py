@@ -107,8 +107,9 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         The mean segment vector ``s̄``, radians.
     eigenvalues_ : ndarray of shape (d,)
         Eigenvalues of the covariance K (divisor N), descending, rad².
-    eigenvectors_ : ndarray of shape (d, d)
-        Unit eigenvectors as columns.
+    eigenvectors_ : ndarray of shape (d, m)
+        Unit eigenvectors as columns: all d, or, fitted from N ≤ d segments, those of the
+        non-zero eigenvalues and at least ``n_components`` (:mod:`visprim.pca`).
     components_ : ndarray of shape (d, f)
         ``E_f``, the first ``n_components`` eigenvectors.
     cluster_centers_ : ndarray of shape (k, f)
@@ -402,7 +403,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
                 f"fit: n_clusters={self.n_clusters} exceeds the number of segments found ({n}); "
                 "lower n_clusters or give more trials"
             )
-        basis = fit_pca(sv.vectors)
+        basis = fit_pca(sv.vectors, n_keep=int(self.n_components))
         counts = corpus.segmentation.counts() if corpus is not None else np.zeros(0)
         return self._set_fitted(
             basis,

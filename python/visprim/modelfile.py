@@ -17,7 +17,8 @@ A NumPy ``.npz`` (zip) archive of ``.npy`` members (never pickles), with these m
     SHA-256 of the rest of the header as canonical JSON (sorted keys, no spaces). Every byte
     that matters is therefore checksummed: the header directly, the arrays through it.
 
-``mean`` (d,) radians; ``eigenvalues`` (d,) rad², descending; ``eigenvectors`` (d, d), columns;
+``mean`` (d,) radians; ``eigenvalues`` (d,) rad², descending; ``eigenvectors`` (d, m), columns
+(m = d, or fewer for a model fitted from N ≤ d segments; at least the model's f);
 ``cluster_centers`` (k, f) in the projection space; ``labels`` (N,) int64;
 ``segment_trial`` (N,) int64; ``segment_starts`` / ``segment_ends`` (N,) seconds;
 ``primitive_durations`` (k,) seconds; ``training_vectors`` (N, d) radians (written by
@@ -439,8 +440,9 @@ def check_shapes(path: Path, arrays: Mapping[str, NDArray[Any]]) -> None:
     vectors = arrays.get("training_vectors")
     consistent = (
         arrays["eigenvalues"].shape == (d,)
-        and arrays["eigenvectors"].shape == (d, d)
-        and centres.shape[1] <= d
+        and arrays["eigenvectors"].ndim == 2
+        and arrays["eigenvectors"].shape[0] == d
+        and centres.shape[1] <= arrays["eigenvectors"].shape[1] <= d
         and arrays["primitive_durations"].shape == (k,)
         and all(
             arrays[a].shape == (n,) for a in ("segment_trial", "segment_starts", "segment_ends")

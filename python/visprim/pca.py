@@ -10,11 +10,13 @@ With divisor N, the mean squared reconstruction error over the training vectors 
 sum of the dropped eigenvalues ``Σ_{i > f} λ_i`` exactly (the projection error of Table 1).
 
 Fewer vectors than dimensions (N ≤ d, common with two-arm 1200-D vectors of a few hundred
-segments): K has rank below N and a null space of dimension at least d − N + 1, a huge
-repeated eigenvalue 0 that a d × d eigensolver handles slowly. :func:`fit_pca` then
-decomposes the N × N Gram matrix ``G = (1/N) X̃ X̃ᵀ`` instead (same non-zero eigenvalues;
-eigenvectors ``X̃ᵀ u / √(N λ)``) and completes the basis with an orthonormal basis of the
-null space (eigenvalue 0).
+segments): K has rank r < N and a null space of dimension d − r, a huge repeated eigenvalue
+0 that a d × d eigensolver handles slowly and whose eigenvectors the data do not determine.
+:func:`fit_pca` then decomposes the N × N Gram matrix ``G = (1/N) X̃ X̃ᵀ`` instead (same
+non-zero eigenvalues; eigenvectors ``X̃ᵀ u / √(N λ)``) and keeps the r eigenvectors of the
+non-zero eigenvalues; the eigenvalues are still all d (zeros after r). Where more
+eigenvectors are asked for (:meth:`PCABasis.components`), the null space is spanned by the
+coordinate axes farthest from the kept eigenvectors, orthonormalised (deterministic).
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import solve_triangular
 
 from visprim import kernels
 
@@ -38,8 +41,9 @@ class PCABasis:
         ``s̄`` (units of the vectors: radians for segment vectors).
     eigenvalues : (d,) array, descending
         Eigenvalues of K (squared units).
-    eigenvectors : (d, d) array
-        Unit eigenvectors as columns, in the order of ``eigenvalues``.
+    eigenvectors : (d, m) array
+        Unit eigenvectors as columns, in the order of ``eigenvalues``: all d, or (fitted
+        from N ≤ d vectors) at least those of the non-zero eigenvalues (module docstring).
     n_vectors : int
         Number of vectors N the basis was computed from.
     """
@@ -56,15 +60,15 @@ class PCABasis:
 
     def _check_f(self, f: int) -> int:
         f = int(f)
-        if not 1 <= f <= self.eigenvectors.shape[1]:
-            raise ValueError(
-                f"number of eigenvectors f must be in [1, {self.eigenvectors.shape[1]}], got {f}"
-            )
+        if not 1 <= f <= self.dim:
+            raise ValueError(f"number of eigenvectors f must be in [1, {self.dim}], got {f}")
         return f
 
     def components(self, f: int) -> NDArray[np.float64]:
-        """``E_f``: the first ``f`` eigenvectors, shape (d, f)."""
-        return self.eigenvectors[:, : self._check_f(f)]
+        """``E_f``: the first ``f`` eigenvectors, shape (d, f) (beyond the stored ones, an
+        orthonormal basis of the null space: see the module docstring)."""
+        f = self._check_f(f)
+        return _with_null_space(self.eigenvectors, f)
 
     def project(self, vectors: ArrayLike, f: int) -> NDArray[np.float64]:
         """``p = E_fᵀ (s − s̄)`` for each row of ``vectors`` (N, d) → (N, f)."""
@@ -103,13 +107,15 @@ def _as_rows(x: ArrayLike, d: int, name: str) -> NDArray[np.float64]:
     return a
 
 
-def fit_pca(vectors: ArrayLike) -> PCABasis:
+def fit_pca(vectors: ArrayLike, n_keep: int = 0) -> PCABasis:
     """Mean, covariance (divisor N) and its eigen-decomposition, all in the Rust kernels.
 
     Parameters
     ----------
     vectors : (N, d) array
         One vector per row (N ≥ 2).
+    n_keep : int
+        Eigenvectors to keep at least when N ≤ d (module docstring); all d otherwise.
     """
     x = np.ascontiguousarray(vectors, dtype=np.float64)
     if x.ndim != 2:
@@ -117,7 +123,7 @@ def fit_pca(vectors: ArrayLike) -> PCABasis:
     if x.shape[0] < 2:
         raise ValueError(f"PCA needs at least 2 vectors, got {x.shape[0]}")
     if x.shape[0] <= x.shape[1]:
-        return _fit_pca_gram(x)
+        return _fit_pca_gram(x, int(n_keep))
     mean, cov = kernels.covariance(x)
     values, vecs = kernels.eigh(cov)
     return PCABasis(
@@ -128,7 +134,7 @@ def fit_pca(vectors: ArrayLike) -> PCABasis:
     )
 
 
-def _fit_pca_gram(x: NDArray[np.float64]) -> PCABasis:
+def _fit_pca_gram(x: NDArray[np.float64], n_keep: int) -> PCABasis:
     """:func:`fit_pca` through the N × N Gram matrix, for N ≤ d (see the module docstring)."""
     n, d = x.shape
     mean = x.mean(axis=0)
@@ -138,25 +144,44 @@ def _fit_pca_gram(x: NDArray[np.float64]) -> PCABasis:
     g_values, u = kernels.eigh(gram)
     g_values = np.asarray(g_values)
     # Eigenvalues at rounding level of the largest are the null space (the centred rows
-    # sum to zero, so rank ≤ N − 1).
+    # sum to zero, so r ≤ N − 1).
     tol = max(n, d) * np.finfo(np.float64).eps * max(float(g_values[0]), 0.0)
     r = int(np.count_nonzero(g_values > tol))
-    vecs = np.empty((d, d))
-    if r:
-        v = xc.T @ np.asarray(u)[:, :r] / np.sqrt(n * g_values[:r])
-        vecs[:, :r], _ = np.linalg.qr(v)  # orthonormal to rounding already; QR tidies it
-        # QR may flip signs: rebuild each column's sign from the Gram eigenvector.
-        flip = np.sum(vecs[:, :r] * v, axis=0) < 0
-        vecs[:, :r][:, flip] *= -1.0
-    if r < d:
-        q, _ = np.linalg.qr(vecs[:, :r] if r else np.zeros((d, 0)), mode="complete")
-        vecs[:, r:] = q[:, r:]
+    vecs = xc.T @ np.asarray(u)[:, :r]
+    vecs /= np.linalg.norm(vecs, axis=0)  # = / √(N λ) up to rounding
+    # Orthonormal up to rounding that grows as λ shrinks: two Cholesky-QR passes restore
+    # it to machine precision (cheaper than Householder QR for d ≫ r).
+    for _ in range(2):
+        chol = np.linalg.cholesky(vecs.T @ vecs)
+        vecs = solve_triangular(chol, vecs.T, lower=True).T
     # The kernel's sign convention: each column's component of largest |value| positive.
-    top = vecs[np.argmax(np.abs(vecs), axis=0), np.arange(d)]
+    top = vecs[np.argmax(np.abs(vecs), axis=0), np.arange(r)]
     vecs *= np.where(top < 0, -1.0, 1.0)
     values = np.zeros(d)
     values[:r] = g_values[:r]
+    vecs = _with_null_space(vecs, min(d, max(r, n_keep)))
     return PCABasis(mean=mean, eigenvalues=values, eigenvectors=vecs, n_vectors=int(n))
+
+
+def _with_null_space(vecs: NDArray[np.float64], m: int) -> NDArray[np.float64]:
+    """The first ``m`` columns of the orthonormal ``vecs`` (d, r), completed when ``m > r``
+    by the coordinate axes farthest from their span, one at a time, orthonormalised."""
+    d, r = vecs.shape
+    if m <= r:
+        return vecs[:, :m]
+    out = np.zeros((d, m))
+    out[:, :r] = vecs
+    residual = 1.0 - np.sum(vecs**2, axis=1)  # squared distance of each axis to the span
+    for j in range(r, m):
+        axis = int(np.argmax(residual))
+        w = -out[axis, :j].copy()  # e_axis − Q Qᵀ e_axis, twice for rounding
+        w = out[:, :j] @ w
+        w[axis] += 1.0
+        w -= out[:, :j] @ (out[:, :j].T @ w)
+        out[:, j] = w / np.linalg.norm(w)
+        residual -= out[:, j] ** 2
+        residual[axis] = -1.0
+    return out
 
 
 def fit_pca_chunks(chunks: Iterable[ArrayLike]) -> PCABasis:
