@@ -10,7 +10,8 @@
 - :mod:`~visprim.sim.joining`: segment curves joined with no step in angle or velocity.
 - :mod:`~visprim.sim.sidebyside`: the imitation video (human arm beside Adonis).
 - :mod:`~visprim.sim.video`: .gif / .mp4 writing, atomic.
-- :mod:`~visprim.sim.urdf`: Adonis as URDF from the same table;
+- :mod:`~visprim.sim.urdf`: Adonis as URDF from the same table; :mod:`~visprim.sim.mjcf`: as
+  MJCF (MuJoCo);
   :mod:`~visprim.sim.export`: joint trajectories (CSV, JSON for a ROS JointTrajectory).
 
 Units: seconds, metres, radians (degrees only in fields named ``_deg``).
