@@ -12,17 +12,21 @@ baseline beside it, the near-copy from each segment's own projection (``--source
 projection``), both played on Adonis with the stable PD at 1 ms.
 
 Speed (median of repeated runs, [min, max] beside it): ``play`` of each rebuild without
-rendering as a real-time factor (movement seconds / wall seconds), with bare
-``World.step()`` of the same model as the reference measured in the same run; drawing one
-Adonis frame and one side-by-side video frame (480×480 panels), ms per frame, beside the
-matplotlib renderer visprim used before (``benches/_render_matplotlib.py``) in the same run.
+rendering as a real-time factor (movement seconds / wall seconds; dt = 1 ms, and 2 ms for
+the last recording), each run followed by bare ``World.step()`` of the same model over the
+same number of steps (arms swinging) as the reference, and the ratio of the two per run (the
+machine may be shared: the ratio is what carries over); drawing one Adonis frame and one
+side-by-side video frame (480×480 panels), ms per frame, beside the matplotlib renderer
+visprim used before (``benches/_render_matplotlib.py``) in the same run.
 
-Run: ``PYTHONPATH=python .venv/bin/python benches/bench_imitate.py [--quick]``.
+Run: ``PYTHONPATH=python .venv/bin/python benches/bench_imitate.py [--quick]`` (the shared
+data from ``../shared/data``, or ``VISPRIM_SHARED_DATA``, or ``--data``).
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import time
@@ -32,7 +36,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 REPO = Path(__file__).resolve().parents[1]
-DATA = REPO.parent / "shared" / "data"
+# ../shared/data beside the repository; VISPRIM_SHARED_DATA overrides it (git worktrees).
+DATA = Path(os.environ.get("VISPRIM_SHARED_DATA", REPO.parent / "shared" / "data"))
 TRAIN_SUBJECTS = ("bd", "bk", "dg")
 RECORDINGS = (
     "hdm05_cut_amc/HDM_mm_throwBasketball_010_120.amc",
@@ -45,6 +50,22 @@ def spread(values: list[float], fmt: str = "{:.2f}") -> str:
     return f"{fmt.format(statistics.median(values))} [{fmt.format(min(values))}, " + (
         f"{fmt.format(max(values))}]"
     )
+
+
+def bare_factor(adonis: tuple, start: np.ndarray, n_steps: int, dt: float) -> float:
+    """Real-time factor of ``n_steps`` bare ``World.step()`` calls of ``adonis`` (the servo's
+    joint damping as ``play`` left it) from ``start`` with the arms swinging at 2 rad/s."""
+    world, skel = adonis
+    world.reset()
+    skel.resetCommands()
+    skel.setPositions(start)
+    swing = np.zeros(skel.getNumDofs())
+    swing[6:10] = 2.0
+    skel.setVelocities(swing)
+    t0 = time.perf_counter()
+    for _ in range(n_steps):
+        world.step()
+    return n_steps * dt / (time.perf_counter() - t0)
 
 
 def learn(data: Path, out: Path) -> object:
@@ -124,30 +145,33 @@ def main() -> None:
             print(f"  {name}: {seq}")
 
     # ---------------------------------------------------------------- speed
-    adonis = build_adonis(0.001)
+    # Each repeat times ``play`` of every rebuild and, right after it, bare World.step() of
+    # the same model over the same number of steps with the arm swinging (no Python per
+    # step beyond the call), so that the ratio of the two is measured under the same load.
     for res in results:
         grid = np.linspace(res.rebuild.start, res.rebuild.end, res.times.shape[0] * 7)
         angles, _ = res.rebuild(grid)
-        walls = []
-        for _ in range(repeat):
-            t0 = time.perf_counter()
-            pb = play(grid, angles, model=adonis)
-            walls.append(time.perf_counter() - t0)
-        speed.append((res.name, pb.movement_duration, [pb.movement_duration / w for w in walls]))
-    world, skel = adonis
-    n_steps = 2000
-    bare = []
-    for _ in range(repeat):
-        world.reset()
-        t0 = time.perf_counter()
-        for _ in range(n_steps):
-            world.step()
-        bare.append(n_steps * 0.001 / (time.perf_counter() - t0))
-    print("\n| playback (stable PD, 1 ms, no rendering) | movement | real-time factor |")
-    print("|---|---:|---|")
-    for name, dur, factors in speed:
-        print(f"| {name} | {dur:.2f} s | {spread(factors, '{:.1f}')}x |")
-    print(f"| reference: bare World.step(), 2 s | 2.00 s | {spread(bare, '{:.1f}')}x |")
+        for dt in (0.001, 0.002) if res is results[-1] else (0.001,):
+            adonis = build_adonis(dt)
+            factors, bare, errors = [], [], []
+            for _ in range(repeat):
+                t0 = time.perf_counter()
+                pb = play(grid, angles, model=adonis, dt=dt)
+                factors.append(pb.movement_duration / (time.perf_counter() - t0))
+                bare.append(bare_factor(adonis, pb.q_actual[0], pb.times.shape[0], dt))
+                errors.append(pb.rms_error_deg)
+            speed.append((res.name, dt, pb.movement_duration, factors, bare, errors[-1]))
+    print(
+        "\n| playback (stable PD, no rendering) | dt | movement | real-time factor "
+        "| bare World.step, same steps | playback / bare | tracking RMS vs set point |"
+    )
+    print("|---|---:|---:|---|---|---|---:|")
+    for name, dt, dur, factors, bare, err in speed:
+        ratios = [f / b for f, b in zip(factors, bare, strict=True)]
+        print(
+            f"| {name} | {dt * 1e3:g} ms | {dur:.2f} s | {spread(factors, '{:.1f}')}x | "
+            f"{spread(bare, '{:.1f}')}x | {spread(ratios)} | {err:.3f}° |"
+        )
 
     from _render_matplotlib import Camera as MplCamera
     from _render_matplotlib import _frame_drawer, _to_image
