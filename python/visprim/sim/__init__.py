@@ -5,6 +5,7 @@
 - :mod:`~visprim.sim.servo`: the stable-PD joint servo, the paper's explicit PD, the gains.
 - :mod:`~visprim.sim.sequencer`: the right arm's 4 angles → joint targets, via points.
 - :mod:`~visprim.sim.playback`: :func:`play` → :class:`Playback` (tracking metrics, frames).
+- :mod:`~visprim.sim.kinematics`: forward kinematics of the skeleton in numpy, batched.
 - :mod:`~visprim.sim.render`: :func:`render_png`, :func:`render_gif` (PIL, headless).
 - :mod:`~visprim.sim.showcase`: primitive trajectories, playbacks and the demo GIFs.
 - :mod:`~visprim.sim.joining`: segment curves joined with no step in angle or velocity.
