@@ -140,3 +140,7 @@ def test_simulate_source_needs_a_movement(tmp_path, monkeypatch, capsys) -> None
     assert main([*argv, "--out", str(tmp_path / "x.gif")]) == 2
     assert "--source applies to --movement only" in capsys.readouterr().err
     assert not (tmp_path / "x.gif").exists()
+    argv = ["simulate", str(model_file), "--movement", str(tmp_path / "none.bvh")]
+    assert main([*argv, "--out", str(tmp_path / "x.gif")]) == 2
+    assert "recording" in capsys.readouterr().err
+    assert not (tmp_path / "x.gif").exists()

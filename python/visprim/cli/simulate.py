@@ -40,6 +40,8 @@ def run(args: argparse.Namespace) -> int:
         raise common.UsageError(
             f"model file {args.model!r} not found; give a model written by `visprim learn`"
         )
+    if args.movement is not None and not Path(args.movement).is_file():
+        raise common.UsageError(f"recording {args.movement!r} not found")
     out = outputs.check_file(args.out, tuple(PICTURES), force=args.force, what="picture")
     summary = None
     with stages(3, "simulate") as st:
