@@ -73,8 +73,8 @@ def test_export_robot_writes_urdf_and_primitive_trajectories(files, tmp_path, ca
     assert len(list(traj.glob("primitive_*.json"))) == len(list(traj.glob("primitive_*.csv"))) == k
     doc = json.loads((traj / "primitive_00.json").read_text())
     assert len(doc["joint_names"]) == 20 and doc["points"][0]["time_from_start"]["sec"] == 0
-    assert main(["export-robot", "--out", str(tmp_path / "a.xml")]) == 2
-    assert ".urdf" in capsys.readouterr().err
+    assert main(["export-robot", "--out", str(tmp_path / "a.sdf")]) == 2
+    assert ".urdf or .xml" in capsys.readouterr().err
     assert main(argv) == 2  # outputs exist
     assert "--force" in capsys.readouterr().err
     assert main([*argv, "--force"]) == 0

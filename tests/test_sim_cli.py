@@ -84,13 +84,15 @@ def test_simulate_command_with_stand_in_model(tmp_path, monkeypatch, capsys) -> 
 
 def test_simulate_learned_model_primitives_and_movement(tmp_path, capsys) -> None:
     """End to end on a small generated corpus: learn, save, then play every primitive
-    (the simulation targets) and render one primitive and one reconstructed movement."""
+    (the simulation targets), render one primitive, and imitate a recording through the
+    primitives (the chain of `visprim imitate`, not the near-copy projection)."""
     datasets = pytest.importorskip("visprim.datasets")
     from visprim import PrimitiveModel
+    from visprim.imitate import imitate
     from visprim.markers_csv import write_marker_csv
 
     trials = datasets.imitation_experiment(n_subjects=2, n_stimuli=4, seed=0)
-    model = PrimitiveModel(n_components=8, n_clusters=5, n_init=2).fit(trials)
+    model = PrimitiveModel(n_components=8, n_clusters=5, n_init=2).fit(trials[1:])
     path = tmp_path / "model.vpm"
     model.save(path)
     loaded = PrimitiveModel.load(path)
@@ -101,10 +103,44 @@ def test_simulate_learned_model_primitives_and_movement(tmp_path, capsys) -> Non
     gif = tmp_path / "p0.gif"
     assert main(["simulate", str(path), "--primitive", "0", "--out", str(gif)]) == 0
     assert gif.is_file()
+    capsys.readouterr()
     trial_file = tmp_path / f"{trials[0].name}.csv"
     write_marker_csv(trial_file, trials[0])
     gif2 = tmp_path / "movement.gif"
     assert main(["simulate", str(path), "--movement", str(trial_file), "--out", str(gif2)]) == 0
     with Image.open(gif2) as im:
         assert im.n_frames > 25  # a whole 3-5 s movement
-    assert "movement" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    # The figures printed are those of the imitation through primitives of that recording,
+    # measured against the human, with the uncovered parts listed.
+    ref = imitate(loaded, str(trial_file), play=False).metrics
+    assert "NEAR-COPY" not in printed and "uncovered" in printed
+    seq = " ".join(str(k) for k in ref["primitive_sequence"])
+    assert f"primitives {seq}" in printed
+    assert f"overall {ref['rebuild_vs_human_rms_deg']['overall']:.2f}" in printed
+    assert "Adonis vs human" in printed
+    near = imitate(loaded, str(trial_file), source="projection", play=False).metrics
+    assert near["rebuild_vs_human_rms_deg"]["overall"] != pytest.approx(
+        ref["rebuild_vs_human_rms_deg"]["overall"], abs=0.01
+    )
+    png = tmp_path / "near.png"
+    argv = ["simulate", str(path), "--movement", str(trial_file), "--out", str(png)]
+    assert main([*argv, "--source", "projection"]) == 0
+    printed = capsys.readouterr().out
+    assert "NEAR-COPY" in printed
+    assert f"overall {near['rebuild_vs_human_rms_deg']['overall']:.2f}" in printed
+    assert png.is_file()
+
+
+def test_simulate_source_needs_a_movement(tmp_path, monkeypatch, capsys) -> None:
+    model_file = tmp_path / "model.npz"
+    model_file.write_bytes(b"stand-in")
+    monkeypatch.setattr(simulate_cli, "_load_model", lambda path: FakeModel())
+    argv = ["simulate", str(model_file), "--primitive", "0", "--source", "projection"]
+    assert main([*argv, "--out", str(tmp_path / "x.gif")]) == 2
+    assert "--source applies to --movement only" in capsys.readouterr().err
+    assert not (tmp_path / "x.gif").exists()
+    argv = ["simulate", str(model_file), "--movement", str(tmp_path / "none.bvh")]
+    assert main([*argv, "--out", str(tmp_path / "x.gif")]) == 2
+    assert "recording" in capsys.readouterr().err
+    assert not (tmp_path / "x.gif").exists()

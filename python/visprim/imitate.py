@@ -127,7 +127,8 @@ class Imitation:
         m = self.metrics
         rb = m["rebuild_vs_human_rms_deg"]
         lines = [
-            f"{self.name}: {len(self.primitives)} segments -> primitives "
+            f"{self.name} ({len(self.times)} frames every {1e3 * m['frame_period_s']:.1f} ms, "
+            f"{m['segmentation'].upper()}): {len(self.primitives)} segments -> primitives "
             f"{' '.join(str(int(k)) for k in self.primitives)}",
             f"  rebuild: {SOURCE_LABELS[self.source]}",
             "  rebuild vs human RMS (deg): "

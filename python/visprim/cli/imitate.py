@@ -9,6 +9,18 @@ from typing import Any
 from visprim.cli import common, outputs
 
 
+def read_recording(args: argparse.Namespace, path: str, model: Any) -> Any:
+    """Read the recording ``path`` with the reader options of ``args``: both arms for a
+    two-arm model (whatever ``--arm`` says), else the arm asked for."""
+    from visprim.io import read
+
+    opts = common.reader_options(args)
+    arm = opts.pop("arm")
+    if len(getattr(model, "arms_", ("right",))) == 2:
+        arm = "both"  # a two-arm model imitates both arms of the recording
+    return read(path, arm, **opts)
+
+
 def run(args: argparse.Namespace) -> int:
     """``visprim imitate MODEL RECORDING --out DIR``; see :mod:`visprim.imitate`."""
     from visprim.progress import stages
@@ -29,16 +41,11 @@ def run(args: argparse.Namespace) -> int:
     out = outputs.check_folder(args.out, force=args.force, inputs=[args.model, args.recording])
     dt = args.dt if args.dt is not None else (0.001 if args.servo == "stable" else 0.0001)
     from visprim.imitate import imitate, write_imitation
-    from visprim.io import read
 
     with stages(4, "imitate") as progress:
         progress.step("loading")
         model = common.load_model(args.model)
-        opts = common.reader_options(args)
-        arm = opts.pop("arm")
-        if len(getattr(model, "arms_", ("right",))) == 2:
-            arm = "both"  # a two-arm model imitates both arms of the recording
-        trial = read(args.recording, arm, **opts)
+        trial = read_recording(args, args.recording, model)
         progress.step(f"segmenting, rebuilding, playing {trial.duration:.1f} s on Adonis")
         result = imitate(model, trial, source=args.source, servo=args.servo, dt=dt)
         progress.step("writing files" + (" and the video" if video else ""))

@@ -5,12 +5,14 @@
 - :mod:`~visprim.sim.servo`: the stable-PD joint servo, the paper's explicit PD, the gains.
 - :mod:`~visprim.sim.sequencer`: the right arm's 4 angles → joint targets, via points.
 - :mod:`~visprim.sim.playback`: :func:`play` → :class:`Playback` (tracking metrics, frames).
+- :mod:`~visprim.sim.kinematics`: forward kinematics of the skeleton in numpy, batched.
 - :mod:`~visprim.sim.render`: :func:`render_png`, :func:`render_gif` (PIL, headless).
 - :mod:`~visprim.sim.showcase`: primitive trajectories, playbacks and the demo GIFs.
 - :mod:`~visprim.sim.joining`: segment curves joined with no step in angle or velocity.
 - :mod:`~visprim.sim.sidebyside`: the imitation video (human arm beside Adonis).
 - :mod:`~visprim.sim.video`: .gif / .mp4 writing, atomic.
-- :mod:`~visprim.sim.urdf`: Adonis as URDF from the same table;
+- :mod:`~visprim.sim.urdf`: Adonis as URDF from the same table; :mod:`~visprim.sim.mjcf`: as
+  MJCF (MuJoCo);
   :mod:`~visprim.sim.export`: joint trajectories (CSV, JSON for a ROS JointTrajectory).
 
 Units: seconds, metres, radians (degrees only in fields named ``_deg``).

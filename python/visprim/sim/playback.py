@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
+from visprim.sim.kinematics import BatchKinematics
 from visprim.sim.model import HAND_POINT, LINKS, ShapeSpec, build_adonis
 from visprim.sim.sequencer import (
     ELBOW_JOINT,
@@ -199,23 +200,6 @@ def hand_points(frames: NDArray[np.float64], hand_index: int) -> NDArray[np.floa
     return tf[:, :3, :3] @ np.asarray(HAND_POINT) + tf[:, :3, 3]
 
 
-def _hand_positions(
-    skeleton: dart.dynamics.Skeleton, positions: NDArray[np.float64]
-) -> NDArray[np.float64]:
-    """World position of the finger point for each row of joint positions (forward
-    kinematics; the skeleton's positions are restored afterwards)."""
-    saved = skeleton.getPositions()
-    hand = skeleton.getBodyNode("r_hand")
-    point = np.asarray(HAND_POINT)
-    out = np.empty((positions.shape[0], 3))
-    for i, q in enumerate(positions):
-        skeleton.setPositions(q)
-        tf = hand.getWorldTransform()
-        out[i] = tf.rotation() @ point + tf.translation()
-    skeleton.setPositions(saved)
-    return out
-
-
 def play(
     times: ArrayLike,
     angles: ArrayLike,
@@ -283,16 +267,17 @@ def play(
                 f"model: the world's time step {world.getTimeStep()} s differs from dt = {dt} s"
             )
     ref = build_reference(skel, times, angles, dt, via_spacing)
+    kinematics = BatchKinematics(skel)
     joint_names, slices = _joint_slices(skel)
     positions, velocities = ref.positions, ref.velocities
     body_names = tuple(b.getName() for b in skel.getBodyNodes())
     hand_index = body_names.index("r_hand")
 
-    # Forward kinematics of the target (before the run; it moves the skeleton).
+    # Forward kinematics of the target (numpy; the skeleton is left alone).
     ref_stride = max(1, int(round(0.01 / dt)))
     ref_steps = np.unique(np.append(np.arange(0, ref.times.shape[0], ref_stride), ref.via_steps))
-    hand_reference = _hand_positions(skel, positions[ref_steps])
-    hand_via = _hand_positions(skel, positions[ref.via_steps])
+    hand_reference = hand_points(kinematics.transforms(positions[ref_steps]), hand_index)
+    hand_via = hand_points(kinematics.transforms(positions[ref.via_steps]), hand_index)
 
     world.reset()
     skel.resetCommands()
@@ -309,13 +294,15 @@ def play(
         world, skel, ref, slices, float(vicinity), float(timeout), gains, frame_stride
     )
     wall_time = time.perf_counter() - wall0
-    rec_q, rec_k, n_rec, completion, frames, frame_steps = rec
+    rec_q, rec_k, n_rec, completion, frame_steps = rec
     reached, reach_times = seq_state
     if not np.all(np.isfinite(rec_q[:n_rec])):
         raise SimulationDiverged("play: the simulation produced NaN joint positions")
     if frame_steps[-1] != n_rec - 1:
-        frames.append(body_transforms(skel))
         frame_steps.append(n_rec - 1)
+    # Body transforms at the frames, from the recorded joint positions (the same forward
+    # kinematics as DART's, vectorised after the run rather than queried in the loop).
+    frames_arr = kinematics.transforms(rec_q[frame_steps])
 
     q_actual = rec_q[:n_rec].copy()
     q_target = positions[rec_k[:n_rec]]
@@ -325,7 +312,6 @@ def play(
         driven += [LEFT_SHOULDER_JOINT, LEFT_ELBOW_JOINT]
     arm = [joint_names.index(j) for j in driven]
     rest = [i for i in range(len(joint_names)) if i not in arm]
-    frames_arr = np.stack(frames)
     return Playback(
         times=np.arange(n_rec, dtype=np.float64) * dt,
         q_target=q_target,
@@ -410,27 +396,23 @@ def inverse_dynamics_feedforward(
     return interp(move), interp(hold)
 
 
-_Record = tuple[NDArray[np.float64], NDArray[np.int64], int, float, list, list]
+_Record = tuple[NDArray[np.float64], NDArray[np.int64], int, float, list]
 
 
 class _Recorder:
     """Joint positions and set-point indices at every step (the loops write ``q`` and ``k``
-    directly, row ``n``), body transforms every ``stride`` steps (:meth:`frame`, which also
-    checks for divergence)."""
+    directly, row ``n``), and the steps of the frames, every ``stride`` steps (:meth:`frame`,
+    which also checks for divergence); :func:`play` turns the positions at those steps into
+    body transforms afterwards."""
 
     def __init__(self, skel: dart.dynamics.Skeleton, n_guess: int, stride: int, dt: float) -> None:
         self.skel, self.stride, self.dt = skel, stride, dt
-        self.bodies = list(skel.getBodyNodes())
         self.q = np.empty((n_guess + 1000, skel.getNumDofs()))
         self.k = np.empty(n_guess + 1000, dtype=np.int64)
         self.q[0] = skel.getPositions()
         self.k[0] = 0
         self.n = 1
-        self.frames = [self.transforms()]
         self.frame_steps = [0]
-
-    def transforms(self) -> NDArray[np.float64]:
-        return np.array([b.getWorldTransform().matrix() for b in self.bodies])
 
     def grow(self) -> None:
         self.q = np.concatenate([self.q, np.empty_like(self.q)])
@@ -443,11 +425,10 @@ class _Recorder:
                 f"play: the simulation diverged at t = {n * self.dt:.3f} s "
                 f"(max joint speed {np.abs(v).max():.3g} rad/s)"
             )
-        self.frames.append(self.transforms())
         self.frame_steps.append(n)
 
     def result(self, n_rec: int, completion: float) -> _Record:
-        return self.q, self.k, n_rec, completion, self.frames, self.frame_steps
+        return self.q, self.k, n_rec, completion, self.frame_steps
 
 
 def _run_stable(
