@@ -75,6 +75,19 @@ def test_dtw_baseline_and_feature_shapes() -> None:
     assert np.median(err) < 0.1
 
 
+def test_frame_step_keeps_every_step_th_frame_of_the_descriptions() -> None:
+    train, y = _data(2, seed=0)
+    clf = MotionClassifier(model_params=SMALL_MODEL).fit(train, y)
+    window = clf.window_seconds_
+    for describe in (primitive_coordinates, reconstructed_directions):
+        every = describe(clf.model_, train[:3], window)
+        third = describe(clf.model_, train[:3], window, 3)
+        for a, b in zip(every, third, strict=True):
+            np.testing.assert_allclose(b, a[::3], atol=1e-12)
+    with pytest.raises(ValueError, match="step"):
+        MotionClassifier(step=0).fit(train, y)
+
+
 def test_segment_descriptions_keep_the_distance_of_absolute_vectors() -> None:
     """[p, √n o] of a shape-and-posture model: with every eigenvector kept, the distance
     between two segments' descriptions is the distance between their absolute vectors."""
