@@ -18,7 +18,7 @@ def run(args: argparse.Namespace) -> int:
             labels=args.labels,
             group_by=args.group,
             classes=classes,
-            classifier=MotionClassifier(method=args.method, band=args.band),
+            classifier=MotionClassifier(method=args.method, band=args.band, step=args.step),
             period=args.resample,
             arm=args.arm,
             jobs=args.jobs,
@@ -70,6 +70,12 @@ def register(sub: Any) -> None:
         type=float,
         default=None,
         help="Sakoe-Chiba band of the DTW, fraction of the length (default: none)",
+    )
+    p.add_argument(
+        "--step",
+        type=int,
+        default=2,
+        help="per-frame descriptions at every STEP-th frame (default 2)",
     )
     p.add_argument(
         "--arm",
