@@ -20,7 +20,7 @@ from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 from visprim.sim.model import DENSITY, GRAVITY, LINKS, LinkSpec, ShapeSpec, composite_inertia
-from visprim.sim.urdf import _f, _v, write_text_atomic
+from visprim.sim.urdf import _f, _v, write_robot_file
 
 __all__ = ["adonis_mjcf", "mjcf_joint_names", "write_mjcf"]
 
@@ -99,10 +99,4 @@ def adonis_mjcf(
 
 def write_mjcf(path: str | os.PathLike[str], **kwargs: object) -> Path:
     """Write :func:`adonis_mjcf` to ``path`` (``.xml``) atomically; returns the path."""
-    out = Path(path)
-    if out.suffix.lower() != ".xml":
-        raise ValueError(f"{out}: an MJCF file name must end in .xml")
-    text = adonis_mjcf(**kwargs)  # type: ignore[arg-type]
-    out.parent.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out, text)
-    return out
+    return write_robot_file(path, ".xml", "an MJCF", lambda: adonis_mjcf(**kwargs))  # type: ignore[arg-type]

@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import os
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Literal
 from xml.sax.saxutils import quoteattr
@@ -190,10 +190,18 @@ def adonis_urdf(
 
 def write_urdf(path: str | os.PathLike[str], **kwargs: object) -> Path:
     """Write :func:`adonis_urdf` to ``path`` atomically; returns the path."""
+    return write_robot_file(path, ".urdf", "a URDF", lambda: adonis_urdf(**kwargs))  # type: ignore[arg-type]
+
+
+def write_robot_file(
+    path: str | os.PathLike[str], suffix: str, what: str, make: Callable[[], str]
+) -> Path:
+    """Write the text ``make()`` to ``path`` atomically, once its name is checked to end in
+    ``suffix`` (``what`` names the format in the error); returns the path."""
     out = Path(path)
-    if out.suffix.lower() != ".urdf":
-        raise ValueError(f"{out}: a URDF file name must end in .urdf")
-    text = adonis_urdf(**kwargs)  # type: ignore[arg-type]
+    if out.suffix.lower() != suffix:
+        raise ValueError(f"{out}: {what} file name must end in {suffix}")
+    text = make()
     out.parent.mkdir(parents=True, exist_ok=True)
     write_text_atomic(out, text)
     return out
