@@ -134,7 +134,11 @@ def test_cli_on_bandai_recordings(shared_data: Path, tmp_path: Path) -> None:
     assert float(row["accuracy"]) >= 0.75
     assert float(row["dtw_baseline_accuracy"]) >= 0.5
     assert "<table>" in (out / "evaluate.html").read_text()
-    assert main(["evaluate", str(tmp_path / "nothing")]) == 2
+    # An existing report is replaced only with --force, refused before any work.
+    before = (out / "summary.csv").read_text()
+    assert main(["evaluate", str(shared_data / "bandai_namco_ds2"), "--out", str(out)]) == 2
+    assert (out / "summary.csv").read_text() == before
+    assert main(["evaluate", str(tmp_path / "nothing"), "--out", str(tmp_path / "r2")]) == 2
 
 
 def test_cli_methods_match_the_classifier() -> None:

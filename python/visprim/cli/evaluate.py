@@ -6,11 +6,15 @@ import argparse
 import sys
 from typing import Any
 
+from visprim.cli import common
+
 
 def run(args: argparse.Namespace) -> int:
     from visprim.classify import MotionClassifier
+    from visprim.cli import outputs
     from visprim.evaluate import evaluate, to_markdown, write_report
 
+    out = outputs.check_folder(args.out, force=args.force, inputs=args.data)
     classes = [c.strip() for c in args.classes.split(",") if c.strip()] if args.classes else None
     try:
         results, notes = evaluate(
@@ -30,8 +34,10 @@ def run(args: argparse.Namespace) -> int:
         print("visprim evaluate: no benchmark to run; " + "; ".join(notes), file=sys.stderr)
         return 2
     print(to_markdown(results, notes), end="")
-    paths = write_report(results, notes, args.out)
-    print(f"\nwritten: {', '.join(str(p) for p in paths.values())}")
+    with outputs.atomic_folder(out, "evaluate") as tmp:
+        paths = write_report(results, notes, tmp)
+    written = ", ".join(str(outputs.moved(p, tmp, out)) for p in paths.values())
+    print(f"\nwritten: {written}")
     return 0
 
 
@@ -88,4 +94,5 @@ def register(sub: Any) -> None:
     )
     p.add_argument("--jobs", type=int, default=None, help="reader processes (default: cores)")
     p.add_argument("--out", default="out/evaluate", help="report folder (default out/evaluate)")
+    common.add_force_option(p)
     p.set_defaults(func=run)
