@@ -21,6 +21,7 @@ Conventions (Acclaim format as written by Vicon BodyBuilder for the CMU database
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import re
@@ -52,7 +53,7 @@ from visprim.io.errors import (
 )
 from visprim.io.rotations import euler_matrix
 from visprim.io.skeleton import resolve_rig
-from visprim.io.text import read_text
+from visprim.io.text import file_stamp, read_text
 
 _DOFS = ("rx", "ry", "rz", "tx", "ty", "tz", "l")
 DEFAULT_AMC_RATE = 120.0
@@ -563,6 +564,21 @@ def forward_kinematics(
     return starts, ends, rots
 
 
+@functools.lru_cache(maxsize=2)
+def _kinematics(
+    path: str, asf_path: str, stamp: tuple[int, ...]
+) -> tuple[AsfSkeleton, AmcMotion, NDArray[np.float64], NDArray[np.float64]]:
+    """Parsed skeleton and motion, bone starts and rotations (read-only arrays). Cached for
+    the last two files (``stamp``: their sizes and modification times), so reading both
+    arms parses and poses a file once."""
+    skel = parse_asf(asf_path)
+    motion = parse_amc(path, skel)
+    starts, _, rots = forward_kinematics(skel, motion)
+    starts.flags.writeable = False
+    rots.flags.writeable = False
+    return skel, motion, starts, rots
+
+
 def find_skeleton(amc_path: str | os.PathLike[str]) -> Path:
     """The ASF for an AMC: the same stem, else the only .asf in its folder, else the one
     whose stem starts the AMC's stem (``charleston1.amc`` → ``charleston.asf``)."""
@@ -602,8 +618,7 @@ def read_amc_arm(
     """
     path = os.fspath(path)
     asf_path = Path(skeleton) if skeleton is not None else find_skeleton(path)
-    skel = parse_asf(asf_path)
-    motion = parse_amc(path, skel)
+    skel, motion, starts, rots = _kinematics(path, os.fspath(asf_path), file_stamp(path, asf_path))
     if motion.n_frames < 2:
         raise ReadError(path, f"a trial needs at least 2 frames, the file has {motion.n_frames}")
     hz = DEFAULT_AMC_RATE if rate is None else float(rate)
@@ -617,7 +632,6 @@ def read_amc_arm(
         roles = resolve_rig(path, skel.names, arm, preset, mapping, kind="bone")
     except MissingPointError as exc:
         raise MissingPointError(path, f"{exc.reason} (skeleton {asf_path})") from None
-    starts, _, rots = forward_kinematics(skel, motion)
 
     def p(role: str) -> NDArray[np.float64]:
         i = roles.index[role]

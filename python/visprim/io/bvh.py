@@ -22,6 +22,7 @@ of values, fewer or more rows than ``Frames:``, NaN/inf values) raise a
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import re
@@ -44,7 +45,7 @@ from visprim.io.assemble import (
 from visprim.io.errors import FrameCountError, MalformedFileError, ReadError, TruncatedFileError
 from visprim.io.rotations import axis_rotation
 from visprim.io.skeleton import resolve_rig
-from visprim.io.text import read_text
+from visprim.io.text import file_stamp, read_text
 
 _CHANNELS = {
     "xposition": ("pos", 0),
@@ -455,6 +456,15 @@ def write_bvh(path: str | os.PathLike[str], data: BvhData, precision: int = 6) -
     Path(path).write_text("\n".join(out) + "\n", encoding="utf-8")
 
 
+@functools.lru_cache(maxsize=2)
+def _parsed(path: str, stamp: tuple[int, ...]) -> BvhData:
+    """:func:`parse_bvh` with its motion read-only, cached for the last two files
+    (``stamp``: size and modification time), so reading both arms parses a file once."""
+    data = parse_bvh(path)
+    data.motion.flags.writeable = False
+    return data
+
+
 def read_bvh_arm(
     path: str | os.PathLike[str],
     arm: str = "right",
@@ -474,7 +484,7 @@ def read_bvh_arm(
     joint's rotation applied to the forearm's rest direction.
     """
     path = os.fspath(path)
-    data = parse_bvh(path)
+    data = _parsed(path, file_stamp(path))
     if data.n_frames < 2:
         raise ReadError(path, f"a trial needs at least 2 frames, the file has {data.n_frames}")
     roles = resolve_rig(path, data.names, arm, preset, mapping, kind="joint")

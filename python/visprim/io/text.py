@@ -42,3 +42,17 @@ def read_text(path: str | os.PathLike[str]) -> tuple[str, str]:
     if not text.strip():
         raise TruncatedFileError(path, "the file is empty")
     return text, encoding
+
+
+def file_stamp(*paths: str | os.PathLike[str]) -> tuple[int, ...]:
+    """Size and modification time (ns) of each file, a cache key that changes when a file
+    does; a file that cannot be examined contributes ``-1, -1`` (its reader reports why)."""
+    out: list[int] = []
+    for p in paths:
+        try:
+            st = os.stat(p)
+        except OSError:
+            out.extend((-1, -1))
+        else:
+            out.extend((st.st_size, st.st_mtime_ns))
+    return tuple(out)
