@@ -39,7 +39,7 @@ def run(args: argparse.Namespace) -> int:
                 f"({', '.join(f'{e}: {w}' for e, w in VIDEO_FORMATS.items())})"
             ) from None
     out = outputs.check_folder(args.out, force=args.force, inputs=[args.model, args.recording])
-    dt = args.dt if args.dt is not None else (0.001 if args.servo == "stable" else 0.0001)
+
     from visprim.imitate import imitate, write_imitation
 
     with stages(4, "imitate") as progress:
@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
         model = common.load_model(args.model)
         trial = read_recording(args, args.recording, model)
         progress.step(f"segmenting, rebuilding, playing {trial.duration:.1f} s on Adonis")
-        result = imitate(model, trial, source=args.source, servo=args.servo, dt=dt)
+        result = imitate(model, trial, source=args.source, servo=args.servo, dt=args.dt)
         progress.step("writing files" + (" and the video" if video else ""))
         with outputs.atomic_folder(out, "imitate") as tmp:
             written = write_imitation(
@@ -98,7 +98,7 @@ def register(sub: Any) -> None:
         "--dt",
         type=float,
         default=None,
-        help="simulation step, s (default 0.001; 0.0001 with --servo paper, whose explicit "
+        help="simulation step, s (default 0.002; 0.0001 with --servo paper, whose explicit "
         "damping diverges at 1 ms)",
     )
     p.add_argument(
