@@ -350,16 +350,27 @@ def _trials(data: Any) -> list[Trial]:
 def local_client(n_workers: int | None = None, *, threads_per_worker: int = 1) -> Any:
     """A ``distributed.Client`` on a new ``LocalCluster`` of worker processes (one thread
     each, and one thread for the Rust kernels in each). Close it with ``client.close()``
-    and ``client.cluster.close()``."""
+    and ``client.cluster.close()``.
+
+    The workers start without Dask's default ``MALLOC_TRIM_THRESHOLD_``: setting it also
+    freezes glibc's mmap threshold at 128 kB, so that every array of a partition (vectors,
+    angles) is mapped, page-faulted and unmapped afresh, which costs pass 1 a large share of
+    its time (``benches/bench_scale.py --modes stream,dask,dask-trim`` measures it). Workers
+    started otherwise (``dask worker``) can do the same with ``MALLOC_TRIM_THRESHOLD_: null``
+    under ``distributed.nanny.pre-spawn-environ`` in their Dask configuration."""
+    import dask
     from distributed import Client, LocalCluster
 
-    cluster = LocalCluster(
-        n_workers=n_workers,
-        threads_per_worker=threads_per_worker,
-        processes=True,
-        dashboard_address=None,
-        env={"RAYON_NUM_THREADS": str(threads_per_worker)},
-    )
+    environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
+    environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+    with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}):
+        cluster = LocalCluster(
+            n_workers=n_workers,
+            threads_per_worker=threads_per_worker,
+            processes=True,
+            dashboard_address=None,
+            env={"RAYON_NUM_THREADS": str(threads_per_worker)},
+        )
     return Client(cluster)
 
 
