@@ -23,8 +23,9 @@ the largest worker):
 * ``dask``: ``fit(corpus, client=...)`` on a ``LocalCluster`` of 2 worker processes with 1
   thread each (:func:`visprim.scale.local_client`), at full size (the cluster's start is not
   timed);
-* ``dask-trim``: the same on a ``LocalCluster`` with Dask's default worker environment
-  (``MALLOC_TRIM_THRESHOLD_=65536``, which ``local_client`` leaves out).
+* ``dask-default``: the same on a ``LocalCluster`` with Dask's default worker settings
+  (``MALLOC_TRIM_THRESHOLD_=65536`` and the statistical profiler, which ``local_client``
+  leaves out).
 
 The overhead of Dask is the ratio of its time to streaming's in the same repetition (the
 modes alternate), reported as the median and range over ``--repeat`` repetitions.
@@ -133,7 +134,7 @@ def run_mode(mode: str, folder: Path, n_items: int) -> dict[str, Any]:
         t0 = time.perf_counter()
         model.fit(corpus)
         out["seconds"] = time.perf_counter() - t0
-    elif mode in ("dask", "dask-trim"):
+    elif mode in ("dask", "dask-default"):
         t0 = time.perf_counter()
         client = dask_client(mode)
         client.wait_for_workers(2)
@@ -158,8 +159,7 @@ def run_mode(mode: str, folder: Path, n_items: int) -> dict[str, Any]:
 
 def dask_client(mode: str) -> Any:
     """2 worker processes, 1 thread each: visprim's ``local_client`` (``dask``), or the same
-    cluster with Dask's default worker environment, ``MALLOC_TRIM_THRESHOLD_=65536``
-    (``dask-trim``)."""
+    cluster with Dask's default worker settings (``dask-default``)."""
     from visprim.scale import local_client
 
     if mode == "dask":
@@ -278,7 +278,7 @@ def main() -> None:
         plan += [("memory", mem_items), ("stream", mem_items)]
     if "stream" in modes:
         plan.append(("stream", full_items))
-    plan += [(m, full_items) for m in ("dask", "dask-trim") if m in modes]
+    plan += [(m, full_items) for m in ("dask", "dask-default") if m in modes]
     plan = list(dict.fromkeys(plan))
     results: dict[tuple[str, int], list[dict[str, Any]]] = {key: [] for key in plan}
     for rep in range(args.repeat):
@@ -315,7 +315,7 @@ def main() -> None:
             f"streaming peak RSS at {s[('stream', full_items)]['segments']:,} segments: "
             f"{s[('stream', full_items)]['rss']:.0f} MB (target <= 1536 MB)"
         )
-    for mode in ("dask", "dask-trim"):
+    for mode in ("dask", "dask-default"):
         if (mode, full_items) not in s or ("stream", full_items) not in s:
             continue
         d, st = s[(mode, full_items)], s[("stream", full_items)]

@@ -91,7 +91,8 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         k-means clusters = primitives, ``k`` (default 30).
     n_init, max_iter, tol : int, int, float
         k-means restarts, iterations per restart and convergence tolerance (scikit-learn's
-        meaning of ``tol``).
+        meaning of ``tol``); above 50,000 segments the restarts run on a sample of them
+        (:mod:`visprim.clustering`).
     seed : int
         Seed of k-means (results are deterministic for a seed).
 

@@ -355,15 +355,22 @@ def local_client(n_workers: int | None = None, *, threads_per_worker: int = 1) -
     The workers start without Dask's default ``MALLOC_TRIM_THRESHOLD_``: setting it also
     freezes glibc's mmap threshold at 128 kB, so that every array of a partition (vectors,
     angles) is mapped, page-faulted and unmapped afresh, which costs pass 1 a large share of
-    its time (``benches/bench_scale.py --modes stream,dask,dask-trim`` measures it). Workers
-    started otherwise (``dask worker``) can do the same with ``MALLOC_TRIM_THRESHOLD_: null``
-    under ``distributed.nanny.pre-spawn-environ`` in their Dask configuration."""
+    its time (``benches/bench_scale.py --modes stream,dask,dask-default`` measures it), nor
+    the statistical profiler (it samples the task thread every 10 ms for the dashboard,
+    which is off). Workers started otherwise (``dask worker``) can do the same in their Dask
+    configuration: ``MALLOC_TRIM_THRESHOLD_: null`` under
+    ``distributed.nanny.pre-spawn-environ``, ``distributed.worker.profile.enabled: false``."""
     import dask
     from distributed import Client, LocalCluster
 
     environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
     environ.pop("MALLOC_TRIM_THRESHOLD_", None)
-    with dask.config.set({"distributed.nanny.pre-spawn-environ": environ}):
+    settings = {
+        "distributed.nanny.pre-spawn-environ": environ,
+        # The statistical profiler feeds the dashboard (off here) and wakes every 10 ms.
+        "distributed.worker.profile.enabled": False,
+    }
+    with dask.config.set(settings):
         cluster = LocalCluster(
             n_workers=n_workers,
             threads_per_worker=threads_per_worker,
@@ -633,9 +640,10 @@ def _kmeans_dask(
         a, b = np.searchsorted(pick, [rows[i], rows[i + 1]])
         if b > a:
             takes.append(client.submit(_take_task, p, pick[a:b] - rows[i], pure=False))
-    candidates = sample_candidates(np.concatenate(client.gather(takes)), k, seed=seed, **opts)
-    groups, members = _group_by_worker(client, projs)
+    sample = np.concatenate(client.gather(takes))
+    groups, members = _group_by_worker(client, projs)  # concatenated while the client seeds
     del projs, takes
+    candidates = sample_candidates(sample, k, seed=seed, **opts)
     spans = [[(rows[i], rows[i + 1]) for i in idx] for idx in members]
     stats = client.gather([client.submit(_stats_task, g, candidates, pure=False) for g in groups])
     centers = candidates[int(np.argmin(np.sum([s[0] for s in stats], axis=0)))]
