@@ -21,7 +21,14 @@ the largest worker):
 * ``stream``: ``fit(corpus)`` (:func:`visprim.scale.fit_streaming`), at the same size as
   ``memory`` and at full size;
 * ``dask``: ``fit(corpus, client=...)`` on a ``LocalCluster`` of 2 worker processes with 1
-  thread each, at full size (the cluster's start is not timed).
+  thread each (:func:`visprim.scale.local_client`), at full size (the cluster's start is not
+  timed);
+* ``dask-default``: the same on a ``LocalCluster`` with Dask's default worker settings
+  (``MALLOC_TRIM_THRESHOLD_=65536`` and the statistical profiler, which ``local_client``
+  leaves out).
+
+The overhead of Dask is the ratio of its time to streaming's in the same repetition (the
+modes alternate), reported as the median and range over ``--repeat`` repetitions.
 
 Merge step: each partition returns a covariance accumulator of d² doubles (d = 400: 1.28 MB);
 the benchmark times one merge and one pickle round trip and says at what partition size the
@@ -127,11 +134,9 @@ def run_mode(mode: str, folder: Path, n_items: int) -> dict[str, Any]:
         t0 = time.perf_counter()
         model.fit(corpus)
         out["seconds"] = time.perf_counter() - t0
-    elif mode == "dask":
-        from visprim.scale import local_client
-
+    elif mode in ("dask", "dask-default"):
         t0 = time.perf_counter()
-        client = local_client(2)
+        client = dask_client(mode)
         client.wait_for_workers(2)
         out["cluster_start_s"] = time.perf_counter() - t0
         try:
@@ -150,6 +155,25 @@ def run_mode(mode: str, folder: Path, n_items: int) -> dict[str, Any]:
     out["inertia"] = float(model.inertia_)
     out["peak_rss_mb"] = peak_rss_mb()
     return out
+
+
+def dask_client(mode: str) -> Any:
+    """2 worker processes, 1 thread each: visprim's ``local_client`` (``dask``), or the same
+    cluster with Dask's default worker settings (``dask-default``)."""
+    from visprim.scale import local_client
+
+    if mode == "dask":
+        return local_client(2)
+    from distributed import Client, LocalCluster
+
+    cluster = LocalCluster(
+        n_workers=2,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=None,
+        env={"RAYON_NUM_THREADS": "1"},
+    )
+    return Client(cluster)
 
 
 def merge_cost() -> dict[str, float]:
@@ -254,8 +278,7 @@ def main() -> None:
         plan += [("memory", mem_items), ("stream", mem_items)]
     if "stream" in modes:
         plan.append(("stream", full_items))
-    if "dask" in modes:
-        plan.append(("dask", full_items))
+    plan += [(m, full_items) for m in ("dask", "dask-default") if m in modes]
     plan = list(dict.fromkeys(plan))
     results: dict[tuple[str, int], list[dict[str, Any]]] = {key: [] for key in plan}
     for rep in range(args.repeat):
@@ -266,7 +289,7 @@ def main() -> None:
                 f"  run {rep + 1}: {mode:<6} {r['segments']:>9} segments "
                 f"{r['seconds']:8.1f} s  {r['segments'] / r['seconds']:9.0f} seg/s  "
                 f"peak RSS {r['peak_rss_mb']:7.0f} MB"
-                + (f" (worker {r['worker_peak_rss_mb']:.0f} MB)" if mode == "dask" else ""),
+                + (f" (worker {r['worker_peak_rss_mb']:.0f} MB)" if "dask" in mode else ""),
                 flush=True,
             )
     s = {key: summarise(v) for key, v in results.items()}
@@ -292,12 +315,20 @@ def main() -> None:
             f"streaming peak RSS at {s[('stream', full_items)]['segments']:,} segments: "
             f"{s[('stream', full_items)]['rss']:.0f} MB (target <= 1536 MB)"
         )
-    if ("dask", full_items) in s and ("stream", full_items) in s:
-        d, st = s[("dask", full_items)], s[("stream", full_items)]
+    for mode in ("dask", "dask-default"):
+        if (mode, full_items) not in s or ("stream", full_items) not in s:
+            continue
+        d, st = s[(mode, full_items)], s[("stream", full_items)]
+        # Time ratios within each repetition (the two runs back to back on the same machine).
+        pairs = zip(results[(mode, full_items)], results[("stream", full_items)], strict=True)
+        over = [a["seconds"] / b["seconds"] - 1 for a, b in pairs]
         print(
-            f"Dask overhead vs streaming on the same 2 cores: {st['rate'] / d['rate'] - 1:+.1%} "
-            f"(time; target <= +30 %); inertia Dask/streaming {d['inertia'] / st['inertia']:.4f}"
+            f"{mode} overhead vs streaming on the same 2 cores (time, per repetition): median "
+            f"{statistics.median(over):+.1%} ({min(over):+.1%} to {max(over):+.1%}; "
+            f"target <= +30 %); inertia {mode}/streaming {d['inertia'] / st['inertia']:.6f}"
         )
+    if ("dask", full_items) in s and ("stream", full_items) in s:
+        d = s[("dask", full_items)]
         per_core = d["rate"] / 2
         print(f"per-core throughput (Dask, 2 workers x 1 thread): {per_core:,.0f} segments/s")
         m = merge_cost()

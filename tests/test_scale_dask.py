@@ -14,11 +14,12 @@ import pytest
 distributed = pytest.importorskip("distributed")
 import cloudpickle  # noqa: E402 (a dependency of distributed)
 import dask  # noqa: E402
+from visprim import clustering  # noqa: E402
 from visprim.cli.main import main as cli_main  # noqa: E402
 from visprim.datasets import imitation_experiment  # noqa: E402
 from visprim.io.corpus import GeneratedCorpus  # noqa: E402
 from visprim.model import PrimitiveModel  # noqa: E402
-from visprim.scale import fit_streaming, local_client  # noqa: E402
+from visprim.scale import fit_dask, fit_streaming, local_client  # noqa: E402
 
 # Workers unpickle the corpus classes below by value (tests/ is not importable there).
 cloudpickle.register_pickle_by_value(sys.modules[__name__])
@@ -67,11 +68,34 @@ def test_dask_fit_equals_streaming_and_in_memory(client, in_memory):
     streamed = fit_streaming(PrimitiveModel(**PARAMS), corpus)
     assert_close_fit(in_memory, on_dask)
     assert_close_fit(streamed, on_dask)
+    # Few segments: k-means on every row in one place, the in-memory fit's own call.
+    assert in_memory.n_training_segments_ <= clustering.sample_size(PARAMS["n_clusters"])
+    np.testing.assert_array_equal(on_dask.labels_, in_memory.labels_)
+    assert on_dask.inertia_ == pytest.approx(in_memory.inertia_, rel=1e-9)
     assert on_dask.training_source_["kind"] == "generated"
     # Labels are the nearest centres of the projections.
     np.testing.assert_array_equal(
         on_dask.labels_, on_dask.assign(in_memory.training_projections_)[0]
     )
+
+
+def test_above_the_sample_size_dask_seeds_and_iterates_as_in_memory(client, monkeypatch):
+    # A small seeding sample makes this corpus "large": k-means++ on the sample, the best
+    # candidate on every row, then Lloyd's iterations on the workers.
+    monkeypatch.setattr(clustering, "SAMPLE_SIZE", 60)
+    params = dict(PARAMS, n_clusters=4)
+    trials = imitation_experiment(N_SUBJECTS, N_STIMULI, SEED)
+    ref = PrimitiveModel(**params).fit(trials)
+    assert ref.n_training_segments_ > 1.5 * clustering.sample_size(4)
+    corpus = GeneratedCorpus(N_SUBJECTS, N_STIMULI, SEED)
+    streamed = fit_streaming(PrimitiveModel(**params), corpus)
+    on_dask = fit_dask(PrimitiveModel(**params), corpus, client, chunk_size=5)
+    for m in (streamed, on_dask):
+        assert_close_fit(ref, m)
+        np.testing.assert_array_equal(m.labels_, ref.labels_)
+        np.testing.assert_allclose(m.cluster_centers_, ref.cluster_centers_, atol=1e-9)
+        assert m.inertia_ == pytest.approx(ref.inertia_, rel=1e-9)
+        assert m.n_iter_ == ref.n_iter_
 
 
 def test_dask_fit_of_a_trial_list(client, in_memory):

@@ -12,7 +12,8 @@
    paper's one arm), γ and α shifted by whole turns so that the segment's mean angle lies
    in (−π, π] (:mod:`visprim.vectors`; reconstructions on a trial's clock add them back);
 6. PCA (:mod:`visprim.pca`), keeping ``n_components`` eigenvectors ``E_f``;
-7. k-means with ``n_clusters`` clusters in the f-D projection space: the primitives.
+7. k-means with ``n_clusters`` clusters in the f-D projection space: the primitives
+   (:mod:`visprim.clustering`; above 50,000 segments seeded on a sample of them).
 
 The paper's exact method is one named setting, :meth:`PrimitiveModel.paper`: Z-Y-Z angles
 and SEG-2's constant tuned from the repetitions. The defaults are made for real
@@ -36,6 +37,7 @@ from sklearn.exceptions import NotFittedError
 
 from visprim import kernels
 from visprim.accuracy import DEFAULT_F_VALUES, DEFAULT_K_VALUES, ErrorTables, compute_error_tables
+from visprim.clustering import kmeans_projections
 from visprim.features import FEATURES, n_channels, periodic_channels, to_angles
 from visprim.pca import PCABasis, fit_pca
 from visprim.preprocess import PreparedCorpus, prepare_corpus
@@ -95,7 +97,8 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         k-means clusters = primitives, ``k`` (default 30).
     n_init, max_iter, tol : int, int, float
         k-means restarts, iterations per restart and convergence tolerance (scikit-learn's
-        meaning of ``tol``).
+        meaning of ``tol``); above 50,000 segments the restarts run on a sample of them
+        (:mod:`visprim.clustering`).
     seed : int
         Seed of k-means (results are deterministic for a seed).
 
@@ -442,15 +445,14 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         segments came from. Shared by the in-memory and the corpus fits
         (:mod:`visprim.scale`)."""
         if clusters is None:
-            km = kernels.kmeans(
-                np.ascontiguousarray(projections),
+            clusters = kmeans_projections(
+                np.asarray(projections),
                 int(self.n_clusters),
                 n_init=int(self.n_init),
                 max_iter=int(self.max_iter),
                 tol=float(self.tol),
                 seed=int(self.seed),
             )
-            clusters = (km.centers, km.labels, km.inertia, km.n_iter)
         centers, labels, inertia, n_iter = clusters
         self.mean_ = basis.mean
         self.eigenvalues_ = basis.eigenvalues

@@ -12,7 +12,9 @@
    :meth:`~visprim.model.PrimitiveModel.vectorize`, merged into a
    :class:`visprim.kernels.CovarianceAccumulator` (reduce: accumulators merge exactly up to
    rounding, in any order); then the eigendecomposition.
-3. **Pass 2**: the projections ``p = E_fᵀ (s − s̄)`` (N × f), then k-means on them.
+3. **Pass 2**: the projections ``p = E_fᵀ (s − s̄)`` (N × f), then k-means on them with
+   :func:`visprim.clustering.kmeans_projections`, the in-memory fit's procedure (above
+   50,000 segments its k-means++ seedings run on a deterministic sample of the rows).
 
 What stays in memory is what the model keeps: the projections (8 f bytes per segment), the
 segments' trial, start and end, and the trial names; never the N × 4n vectors (the model's
@@ -20,21 +22,21 @@ segments' trial, start and end, and the trial names; never the N × 4n vectors (
 needs an in-memory fit).
 
 Streaming (:func:`fit_streaming`) writes each chunk's vectors to a temporary folder in pass 1
-and reads them back in pass 2 (so the corpus is read once), then runs the same k-means as the
-in-memory fit on the projections: identical clusters up to rounding.
+and reads them back in pass 2 (so the corpus is read once), then runs the in-memory fit's
+k-means on the projections: identical clusters up to rounding.
 
 Dask (:func:`fit_dask`, the only code that imports ``dask.distributed``; install
 ``visprim[dask]``): items are split in partitions spread over the workers. A partition task
 computes its vectors (kept on the worker); its covariance accumulator is returned and the
-accumulators are merged in a binary tree; projections are computed where the vectors are.
-k-means: ``n_init`` k-means runs (k-means++ seeding and Lloyd, in the Rust kernel) on a
-deterministic random sample of the projections (:data:`DEFAULT_SAMPLE` rows); the run whose
-centres give the lowest inertia on all the projections seeds Lloyd's iterations on all of
-them, run as map (per-worker sums, counts and inertia) / reduce (sum) until the centres move
-by less than ``tol`` (scikit-learn's scaling: ``tol × mean variance``; the variance of the
-projections is the kept eigenvalues) or ``max_iter``. A lost worker's tasks are re-run by
-Dask from the corpus (their inputs); a task that keeps killing workers ends the fit with a
-:class:`RuntimeError`.
+accumulators are merged in a binary tree; projections are computed where the vectors are and
+stay there. k-means follows :mod:`visprim.clustering` step by step, so the clusters are the
+in-memory fit's up to rounding: up to its sample size the projections are gathered and
+clustered as in memory; above it the sample rows are gathered, the ``n_init`` candidate
+centre sets computed from them, scored on every row by the workers (with the column
+variances that scale ``tol``), and the best one starts Lloyd's iterations as map (per-worker
+sums, counts and farthest rows, for empty clusters) / reduce (the kernel's update rule) until
+the kernel's stopping rule holds. A lost worker's tasks are re-run by Dask from the corpus
+(their inputs); a task that keeps killing workers ends the fit with a :class:`RuntimeError`.
 """
 
 from __future__ import annotations
@@ -53,6 +55,7 @@ from sklearn.base import clone
 from tqdm.auto import tqdm
 
 from visprim import kernels
+from visprim.clustering import kmeans_projections, sample_candidates, sample_rows, sample_size
 from visprim.io.corpus import LazyCorpus, sample_items, trial_names
 from visprim.pca import PCABasis
 from visprim.progress import _disable
@@ -60,7 +63,6 @@ from visprim.segment.seg2 import _MAX_TRIALS
 from visprim.trial import Trial
 
 __all__ = [
-    "DEFAULT_SAMPLE",
     "TrialList",
     "fit_corpus",
     "fit_dask",
@@ -68,9 +70,6 @@ __all__ = [
     "local_client",
     "tune_threshold",
 ]
-
-#: Projections gathered (at most) to seed the distributed k-means.
-DEFAULT_SAMPLE = 50_000
 
 
 class TrialList(LazyCorpus):
@@ -351,16 +350,34 @@ def _trials(data: Any) -> list[Trial]:
 def local_client(n_workers: int | None = None, *, threads_per_worker: int = 1) -> Any:
     """A ``distributed.Client`` on a new ``LocalCluster`` of worker processes (one thread
     each, and one thread for the Rust kernels in each). Close it with ``client.close()``
-    and ``client.cluster.close()``."""
+    and ``client.cluster.close()``.
+
+    The workers start without Dask's default ``MALLOC_TRIM_THRESHOLD_``: setting it also
+    freezes glibc's mmap threshold at 128 kB, so that every array of a partition (vectors,
+    angles) is mapped, page-faulted and unmapped afresh, which costs pass 1 a large share of
+    its time (``benches/bench_scale.py --modes stream,dask,dask-default`` measures it), nor
+    the statistical profiler (it samples the task thread every 10 ms for the dashboard,
+    which is off). Workers started otherwise (``dask worker``) can do the same in their Dask
+    configuration: ``MALLOC_TRIM_THRESHOLD_: null`` under
+    ``distributed.nanny.pre-spawn-environ``, ``distributed.worker.profile.enabled: false``."""
+    import dask
     from distributed import Client, LocalCluster
 
-    cluster = LocalCluster(
-        n_workers=n_workers,
-        threads_per_worker=threads_per_worker,
-        processes=True,
-        dashboard_address=None,
-        env={"RAYON_NUM_THREADS": str(threads_per_worker)},
-    )
+    environ = dict(dask.config.get("distributed.nanny.pre-spawn-environ", {}))
+    environ.pop("MALLOC_TRIM_THRESHOLD_", None)
+    settings = {
+        "distributed.nanny.pre-spawn-environ": environ,
+        # The statistical profiler feeds the dashboard (off here) and wakes every 10 ms.
+        "distributed.worker.profile.enabled": False,
+    }
+    with dask.config.set(settings):
+        cluster = LocalCluster(
+            n_workers=n_workers,
+            threads_per_worker=threads_per_worker,
+            processes=True,
+            dashboard_address=None,
+            env={"RAYON_NUM_THREADS": str(threads_per_worker)},
+        )
     return Client(cluster)
 
 
@@ -396,36 +413,75 @@ def _project_task(block: Block, mean_e: NDArray[np.float64], e: NDArray[np.float
     return block.vectors @ e - mean_e
 
 
-def _sample_task(p: NDArray[np.float64], first: int, fraction: float, seed: int) -> Any:
-    """A random (seeded by the partition's first row: deterministic) ``fraction`` of the
-    rows; random rather than strided, so that periodic corpora are not aliased."""
-    m = min(p.shape[0], int(round(p.shape[0] * fraction)))
-    rng = np.random.default_rng([seed, first])
-    return p[np.sort(rng.choice(p.shape[0], size=m, replace=False))]
+def _take_task(p: NDArray[np.float64], rows: NDArray[np.int64]) -> NDArray[np.float64]:
+    return p[rows]
+
+
+def _stats_task(
+    p: NDArray[np.float64], candidates: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], int, NDArray[np.float64], NDArray[np.float64]]:
+    """The inertia of the rows for each of several centre sets ``(R, k, f)`` → ``(R,)``, and
+    the rows' count, column means and sums of squared deviations (for the variance)."""
+    f = candidates.shape[2]
+    if p.shape[0] == 0:
+        return np.zeros(candidates.shape[0]), 0, np.zeros(f), np.zeros(f)
+    out = np.zeros(candidates.shape[0])
+    for r, c in enumerate(candidates):
+        dist = kernels.kmeans_predict(p, c, n_threads=1)[1]
+        out[r] = float(np.dot(dist, dist))
+    mean = p.mean(axis=0)
+    return out, int(p.shape[0]), mean, np.sum((p - mean) ** 2, axis=0)
+
+
+@dataclass
+class _LloydPart:
+    """One worker's share of a Lloyd iteration: per-cluster sums ``(k, f)`` and counts
+    ``(k,)`` of the rows nearest each centre, and its ``k`` rows farthest from their centre
+    (distance, global row index, label, values), for re-seeding empty clusters."""
+
+    sums: NDArray[np.float64]
+    counts: NDArray[np.int64]
+    far_dist: NDArray[np.float64]
+    far_row: NDArray[np.int64]
+    far_label: NDArray[np.int64]
+    far_values: NDArray[np.float64]
+
+
+def _global_rows(local: NDArray[np.int64], spans: list[tuple[int, int]]) -> NDArray[np.int64]:
+    """Global row numbers of positions in the concatenation of the row ranges ``spans``."""
+    sizes = np.array([b - a for a, b in spans], dtype=np.int64)
+    ends = np.cumsum(sizes)
+    which = np.searchsorted(ends, local, side="right")
+    starts = np.array([a for a, _ in spans], dtype=np.int64)
+    return starts[which] + local - (ends[which] - sizes[which])
 
 
 def _lloyd_task(
-    p: NDArray[np.float64], centers: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], NDArray[np.float64], float]:
-    """Map step of one Lloyd iteration: per-cluster sums (k, f) and counts (k,) of the rows
-    nearest each centre, and their squared distances summed (inertia)."""
+    p: NDArray[np.float64], centers: NDArray[np.float64], spans: list[tuple[int, int]]
+) -> _LloydPart:
+    """Map step of one Lloyd iteration (the assignment, and the sums of the update)."""
     k, f = centers.shape
     if p.shape[0] == 0:
-        return np.zeros((k, f)), np.zeros(k), 0.0
+        none = np.zeros(0, dtype=np.int64)
+        return _LloydPart(np.zeros((k, f)), np.zeros(k, np.int64), np.zeros(0), none, none, p)
     labels, dist = kernels.kmeans_predict(p, centers, n_threads=1)
-    counts = np.bincount(labels, minlength=k).astype(np.float64)
+    counts = np.bincount(labels, minlength=k)
     sums = np.stack([np.bincount(labels, weights=p[:, j], minlength=k) for j in range(f)], 1)
-    return sums.astype(np.float64), counts, float(np.dot(dist, dist))
-
-
-def _inertia_task(p: NDArray[np.float64], candidates: NDArray[np.float64]) -> Any:
-    """Inertia of the rows for each of several centre sets (R, k, f) → (R,)."""
-    out = np.zeros(candidates.shape[0])
-    if p.shape[0]:
-        for r, c in enumerate(candidates):
-            dist = kernels.kmeans_predict(p, c, n_threads=1)[1]
-            out[r] = float(np.dot(dist, dist))
-    return out
+    m = min(k, p.shape[0])
+    # The m largest distances, ties by row (all rows tied with the m-th are candidates).
+    cut = np.partition(dist, p.shape[0] - m)[p.shape[0] - m]
+    cand = np.flatnonzero(dist >= cut)
+    rows = _global_rows(cand, spans)
+    order = np.lexsort((rows, -dist[cand]))[:m]
+    far = cand[order]
+    return _LloydPart(
+        sums.astype(np.float64),
+        counts.astype(np.int64),
+        dist[far],
+        rows[order],
+        np.asarray(labels, dtype=np.int64)[far],
+        p[far],
+    )
 
 
 def _assign_task(
@@ -435,6 +491,34 @@ def _assign_task(
         return np.zeros(0, dtype=np.int64), 0.0
     labels, dist = kernels.kmeans_predict(p, centers, n_threads=1)
     return np.asarray(labels, dtype=np.int64), float(np.dot(dist, dist))
+
+
+def _lloyd_update(
+    parts: list[_LloydPart], centers: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], float]:
+    """Reduce step: the new centres and the total squared shift, with
+    :func:`visprim.kernels.kmeans`'s rules (an empty cluster takes the row farthest from its
+    own centre, the i-th empty one the i-th farthest row, ties by row; that row's cluster
+    loses it; a cluster still empty keeps its centre)."""
+    totals = np.sum([q.sums for q in parts], axis=0)
+    counts = np.sum([q.counts for q in parts], axis=0)
+    empty = np.flatnonzero(counts == 0)
+    dist = np.concatenate([q.far_dist for q in parts])
+    if empty.size and dist.size and float(np.max(dist)) > 0.0:
+        rows = np.concatenate([q.far_row for q in parts])
+        labels = np.concatenate([q.far_label for q in parts])
+        values = np.concatenate([q.far_values for q in parts])
+        order = np.lexsort((rows, -dist))
+        for j, far in zip(empty, order, strict=False):
+            old = int(labels[far])
+            totals[old] -= values[far]
+            totals[j] = values[far]
+            counts[old] -= 1
+            counts[j] = 1
+    new = centers.copy()
+    filled = counts > 0
+    new[filled] = totals[filled] * (1.0 / counts[filled])[:, None]
+    return new, float(np.sum((new[filled] - centers[filled]) ** 2))
 
 
 def _tree_merge(client: Any, futures: list[Any]) -> Any:
@@ -464,7 +548,6 @@ def fit_dask(
     client: Any,
     *,
     chunk_size: int | None = None,
-    sample_size: int = DEFAULT_SAMPLE,
     source: dict[str, Any] | None = None,
 ) -> Any:
     """Fit ``model`` on a Dask cluster (see the module docstring).
@@ -485,7 +568,7 @@ def fit_dask(
     elif isinstance(client, str):
         own = client = Client(client)
     try:
-        return _fit_dask(model, corpus, client, chunk_size, int(sample_size), source)
+        return _fit_dask(model, corpus, client, chunk_size, source)
     except (KilledWorker, CancelledError) as exc:
         raise RuntimeError(
             f"Dask: a task kept killing workers and was abandoned ({exc}); "
@@ -504,7 +587,6 @@ def _fit_dask(
     corpus: LazyCorpus,
     client: Any,
     chunk_size: int | None,
-    sample_size: int,
     source: dict[str, Any] | None,
 ) -> Any:
     n_workers = max(1, len(client.scheduler_info().get("workers", {})))
@@ -528,9 +610,7 @@ def _fit_dask(
     for meta in metas:
         segs.add(meta)
         rows.append(rows[-1] + meta.trial.size)
-    centers, labels, inertia, n_iter = _kmeans_dask(
-        client, model, projs, rows, basis.eigenvalues[:f], sample_size
-    )
+    clusters = _kmeans_dask(client, model, projs, rows)
     return _finish(
         model,
         basis,
@@ -538,63 +618,43 @@ def _fit_dask(
         segs,
         threshold,
         dict(source or corpus.source),
-        clusters=(centers, labels, inertia, n_iter),
+        clusters=clusters,
     )
 
 
 def _kmeans_dask(
-    client: Any,
-    model: Any,
-    projs: list[Any],
-    rows: list[int],
-    variances: NDArray[np.float64],
-    sample_size: int,
+    client: Any, model: Any, projs: list[Any], rows: list[int]
 ) -> tuple[NDArray[np.float64], NDArray[np.int64], float, int]:
-    n = rows[-1]
-    k = int(model.n_clusters)
-    fraction = min(1.0, max(sample_size, 20 * k) / n)
-    sample = np.concatenate(
-        client.gather(
-            [
-                client.submit(_sample_task, p, rows[i], fraction, int(model.seed), pure=False)
-                for i, p in enumerate(projs)
-            ]
-        )
+    """:func:`visprim.clustering.kmeans_projections` of the projections held by the workers
+    (partition ``i`` holds rows ``rows[i]:rows[i + 1]``)."""
+    n, k = rows[-1], int(model.n_clusters)
+    opts: dict[str, Any] = dict(
+        n_init=int(model.n_init), max_iter=int(model.max_iter), tol=float(model.tol)
     )
-    if sample.shape[0] < k:
-        sample = np.concatenate(client.gather(projs))
-    # n_init k-means runs on the sample; the one with the lowest inertia on all the rows
-    # starts Lloyd's iterations on all of them.
-    candidates = np.stack(
-        [
-            kernels.kmeans(
-                np.ascontiguousarray(sample),
-                k,
-                max_iter=int(model.max_iter),
-                tol=float(model.tol),
-                seed=int(model.seed) + r,
-            ).centers
-            for r in range(int(model.n_init))
-        ]
-    )
-    groups, members = _group_by_worker(client, projs)
-    del projs
-    if candidates.shape[0] > 1:
-        scores = client.gather(
-            [client.submit(_inertia_task, g, candidates, pure=False) for g in groups]
-        )
-        centers = candidates[int(np.argmin(np.sum(scores, axis=0)))]
-    else:
-        centers = candidates[0]
-    tol = float(model.tol) * float(np.mean(variances))
+    seed = int(model.seed)
+    if n <= sample_size(k):  # few rows: every row in one place, as in memory
+        return kmeans_projections(np.concatenate(client.gather(projs)), k, seed=seed, **opts)
+    pick = sample_rows(n, k, seed)
+    takes = []
+    for i, p in enumerate(projs):
+        a, b = np.searchsorted(pick, [rows[i], rows[i + 1]])
+        if b > a:
+            takes.append(client.submit(_take_task, p, pick[a:b] - rows[i], pure=False))
+    sample = np.concatenate(client.gather(takes))
+    groups, members = _group_by_worker(client, projs)  # concatenated while the client seeds
+    del projs, takes
+    candidates = sample_candidates(sample, k, seed=seed, **opts)
+    spans = [[(rows[i], rows[i + 1]) for i in idx] for idx in members]
+    stats = client.gather([client.submit(_stats_task, g, candidates, pure=False) for g in groups])
+    centers = candidates[int(np.argmin(np.sum([s[0] for s in stats], axis=0)))]
+    tol = float(model.tol) * _mean_variance([s[1:] for s in stats])
     n_iter = 0
     for n_iter in range(1, int(model.max_iter) + 1):  # noqa: B007 (reported after the loop)
-        parts = client.gather([client.submit(_lloyd_task, g, centers, pure=False) for g in groups])
-        sums = np.sum([s for s, _, _ in parts], axis=0)
-        counts = np.sum([c for _, c, _ in parts], axis=0)
-        new = np.where(counts[:, None] > 0, sums / np.maximum(counts, 1)[:, None], centers)
-        shift = float(np.sum((new - centers) ** 2))
-        centers = new
+        tasks = [
+            client.submit(_lloyd_task, g, centers, sp, pure=False)
+            for g, sp in zip(groups, spans, strict=True)
+        ]
+        centers, shift = _lloyd_update(client.gather(tasks), centers)
         if shift <= tol:
             break
     final = client.gather([client.submit(_assign_task, g, centers, pure=False) for g in groups])
@@ -605,6 +665,23 @@ def _kmeans_dask(
             labels[rows[i] : rows[i + 1]] = part
     inertia = float(sum(i for _, i in final))
     return centers, labels, inertia, n_iter
+
+
+def _mean_variance(
+    parts: list[tuple[int, NDArray[np.float64], NDArray[np.float64]]],
+) -> float:
+    """``mean(var(X, axis=0))`` from per-part counts, means and squared deviations (merged
+    with Chan et al.'s pairwise update)."""
+    n, mean, m2 = 0, np.zeros_like(parts[0][1]), np.zeros_like(parts[0][2])
+    for nb, mb, m2b in parts:
+        if nb == 0:
+            continue
+        total = n + nb
+        delta = mb - mean
+        mean = mean + delta * (nb / total)
+        m2 = m2 + m2b + delta**2 * (n * nb / total)
+        n = total
+    return float(np.mean(m2 / max(n, 1)))
 
 
 def _concat_task(*parts: NDArray[np.float64]) -> NDArray[np.float64]:
