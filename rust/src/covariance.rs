@@ -7,17 +7,19 @@
 //! to rounding.
 //!
 //! The scatter matrix `Σ (x - mean)(x - mean)ᵀ` of a block of rows is computed on rows
-//! centred by a *shift* (the mean of the first rows of the block) in small sub-blocks, with
-//! faer's triangular matrix product (only the lower half of `YᵀY` is formed). The final
-//! correction `- n m mᵀ` (with `m` the mean of the shifted rows) is then tiny compared to the
-//! scatter, so data far from the origin (e.g. positions in metres around an offset) keeps its
-//! precision, unlike the textbook `XᵀX - n μμᵀ`.
+//! centred by a *shift* (the mean of the first rows of the block), forming only the lower half
+//! of `YᵀY`: with the packed AVX2+FMA kernel of [`crate::gram`] where the CPU has it and rows
+//! have at least 16 values, else with faer's triangular matrix product on small sub-blocks. The
+//! final correction `- n m mᵀ` (with `m` the mean of the shifted rows) is then tiny compared to
+//! the scatter, so data far from the origin (e.g. positions in metres around an offset) keeps
+//! its precision, unlike the textbook `XᵀX - n μμᵀ`.
 //!
-//! Parallelism: narrow rows (d < 128) are cut into a number of parts that depends only on `n`
-//! (never on the thread count), each part's scatter is computed sequentially and the parts are
-//! added in order; wide rows go through faer's product parallel over output blocks, whose
-//! per-element summation order does not depend on the split. Results are bit-identical for any
-//! number of rayon threads (tested).
+//! Parallelism: the rows are cut into a number of parts that depends only on `n` (never on the
+//! thread count), each part's scatter is computed sequentially and the parts are added in order
+//! (the pairwise update below). Without the packed kernel, wide rows (d ≥ 128) are instead one
+//! part through faer's product parallel over output blocks, whose per-element summation order
+//! does not depend on the split. Results are bit-identical for any number of rayon threads
+//! (tested).
 
 use faer::linalg::matmul::triangular::{matmul, BlockStructure};
 use faer::{Accum, MatMut, MatRef, Par};
@@ -28,7 +30,8 @@ use crate::{Error, Result};
 
 /// Rows per centred sub-block fed to the matrix product (the block stays in L2 for d ≈ 400).
 const SUB_BLOCK_ROWS: usize = 512;
-/// Row width from which the product itself is parallel (instead of splitting the rows).
+/// Row width from which faer's product itself is parallel (instead of splitting the rows),
+/// when the packed kernel is not used.
 const WIDE: usize = 128;
 /// Minimum rows per parallel part, and the maximum number of parts.
 const MIN_PART_ROWS: usize = 2048;
@@ -536,6 +539,34 @@ mod tests {
             let one = run(1);
             assert_eq!(one, run(2));
             assert_eq!(one, run(3));
+        }
+    }
+
+    #[test]
+    fn packed_kernel_and_faer_agree() {
+        if !gram::available() {
+            return;
+        }
+        for &(n, d) in &[(1usize, 16usize), (700, 16), (3000, 41), (1000, 400)] {
+            let mut x = values(n * d, (n + d) as u64);
+            x.iter_mut().for_each(|v| *v += 3.0);
+            let (packed, ok) = block_moments(&x, n, d, true, Par::Seq).unwrap();
+            let (plain, _) = block_moments(&x, n, d, false, Par::Seq).unwrap();
+            assert!(ok);
+            assert_close(packed.mean(), plain.mean(), 1e-14);
+            assert_close(packed.scatter(), plain.scatter(), 1e-13);
+        }
+    }
+
+    #[test]
+    fn non_finite_values_are_located_on_every_path() {
+        for d in [3usize, 16, 40] {
+            let n = 5000;
+            let mut x = values(n * d, 5);
+            x[4321 * d + 2] = f64::INFINITY;
+            let err = covariance(&x, n, d).unwrap_err();
+            assert!(matches!(err, Error::NonFinite(_)), "{err}");
+            assert!(err.to_string().contains("row 4321, column 2"), "{err}");
         }
     }
 
