@@ -6,8 +6,10 @@
 //! 6 columns (`b[panel][row][6]`), zero beyond `d`. Each 8 × 6 tile of the lower triangle of
 //! the (padded) result accumulates `Σ_row a ⊗ b` in 12 vector registers, from 2 vector loads
 //! and 6 broadcasts per row, both read contiguously. The packed blocks stay in L2 (the tile's
-//! two panels in L1), the result in L3; the packing is also where the shift is subtracted, the column sums
-//! are formed and non-finite values are noticed (no separate pass over the input).
+//! two panels in L1) and the result, stored tile after tile, is a sequential stream; the next
+//! block's input rows are prefetched during the product. The packing is also where the shift
+//! is subtracted, the column sums are formed and non-finite values are noticed (no separate
+//! pass over the input).
 //!
 //! Each element of the result is the sum over the rows in row order (blocks in order, then
 //! rows within a block), so the result does not depend on anything but the input. Only used
@@ -68,27 +70,33 @@ pub fn shifted_gram_lower(
     colsum: &mut [f64],
 ) -> Result<bool> {
     assert!(available(), "the Gram kernel needs AVX2 and FMA");
-    assert!(x.len() == n * d && shift.len() == d && colsum.len() == d && gram.len() == d * d);
+    assert!(d > 0 && Some(x.len()) == n.checked_mul(d) && Some(gram.len()) == d.checked_mul(d));
+    assert!(shift.len() == d && colsum.len() == d);
     let panels = d.div_ceil(PW);
+    // (`dp ≤ d + 23`: `gram` of `d²` values exists, so `d` is far below `usize::MAX`.)
     let dp = panels * PW;
     // The tiles meeting the lower triangle, each 8 × 6 column-major, one after the other in
     // the order `block_product` visits them (a sequential stream for the prefetcher).
     let tiles: usize = (0..dp / MR).map(|p| tiles_in_row(p * MR)).sum();
     let acc_len = buffer::elements::<f64>(&[tiles, MR * NR], "the Gram accumulator")?;
     let (mut acc_buf, acc_off) = aligned_zeroed(acc_len, "the Gram accumulator")?;
-    let (mut pack_buf, pack_off) = aligned_zeroed(2 * KC * dp, "a packed block of rows")?;
+    let pack_len = buffer::elements::<f64>(&[2, KC, dp], "a packed block of rows")?;
+    let (mut pack_buf, pack_off) = aligned_zeroed(pack_len, "a packed block of rows")?;
     let acc = &mut acc_buf[acc_off..acc_off + acc_len];
-    let pack = &mut pack_buf[pack_off..pack_off + 2 * KC * dp];
+    let pack = &mut pack_buf[pack_off..pack_off + pack_len];
     let mut y = buffer::try_zeroed_f64(KC.min(n) * d, "a block of shifted rows")?;
     colsum.fill(0.0);
     #[cfg(target_arch = "x86_64")]
-    for rows in x.chunks(KC * d) {
+    for (b, rows) in x.chunks(KC * d).enumerate() {
         let kc = rows.len() / d;
+        // The rows of the next block (empty after the last one).
+        let rest = &x[((b + 1) * KC * d).min(x.len())..];
+        let next = &rest[..rest.len().min(KC * d)];
         // SAFETY: AVX2 and FMA checked above; the buffers have the lengths the kernels need
-        // (`pack`: `2 · KC · dp`, `acc`: `dp · dp`, both 32-byte aligned).
+        // (`pack`: `2 · KC · dp`, `acc`: every tile, both 32-byte aligned).
         unsafe {
             pack_rows(rows, kc, d, shift, &mut y, pack, colsum);
-            block_product(pack, kc, panels, acc);
+            block_product(pack, kc, panels, acc, next);
         }
     }
     let mut t = 0;
@@ -175,18 +183,28 @@ fn panels<const W: usize>(y: &[f64], kc: usize, d: usize, dst: &mut [f64]) {
 
 /// Adds the products of one packed block (`kc` rows) to every 8 × 6 tile of the padded
 /// `dp × dp` result (`dp = 24 · panels`) that meets the lower triangle; `acc` holds these
-/// tiles one after the other (see `shifted_gram_lower`).
+/// tiles one after the other (see `shifted_gram_lower`). Meanwhile the input rows `next` (of
+/// the next block) are prefetched.
 ///
 /// SAFETY (caller): the CPU has AVX2 and FMA; `pack` holds `2 · KC · dp` values and `acc`
 /// every tile.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn block_product(pack: &[f64], kc: usize, panels: usize, acc: &mut [f64]) {
+unsafe fn block_product(pack: &[f64], kc: usize, panels: usize, acc: &mut [f64], next: &[f64]) {
+    use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
     let dp = panels * PW;
     assert!(pack.len() >= 2 * KC * dp && kc <= KC);
     let (a, b) = pack.split_at(KC * dp);
+    // Cache lines of the next block of rows, requested a share per row tile so that they
+    // arrive (from memory) while this block is multiplied.
+    let lines = next.len().div_ceil(8);
+    let per_tile = lines.div_ceil(dp / MR);
     let mut t = 0;
     for p in 0..dp / MR {
+        for l in p * per_tile..((p + 1) * per_tile).min(lines) {
+            // SAFETY: `l * 8 < next.len()`; a prefetch does not change the program's meaning.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(next.as_ptr().add(l * 8).cast()) };
+        }
         let count = tiles_in_row(p * MR);
         assert!((t + count) * MR * NR <= acc.len());
         for q in 0..count {
