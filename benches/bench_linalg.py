@@ -131,3 +131,17 @@ def run(table: Table, quick: bool = False) -> None:
     print("linalg kernels:", flush=True)
     bench_covariance_eigh(table, quick)
     bench_kmeans(table, quick)
+
+
+if __name__ == "__main__":
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--quick", action="store_true", help="small workloads (smoke test)")
+    parser.add_argument("--covariance-only", action="store_true", help="skip the k-means rows")
+    args = parser.parse_args()
+    tab = Table()
+    bench_covariance_eigh(tab, args.quick)
+    if not args.covariance_only:
+        bench_kmeans(tab, args.quick)
+    tab.print()

@@ -57,6 +57,9 @@ from visprim.segment.clock import frames_to_times
 from visprim.segment.zvc import CorpusCrossings
 
 ORDER, CUTOFF, MIN_CHANGE_DEG, N_SAMPLES, F, K, N_INIT, SEED = 10, 0.25, 5.0, 100, 30, 30, 4, 0
+#: The paper's SEG-1 (one 300 ms window for every trial), which the numpy reference implements;
+#: visprim's default also shortens the window of fast cyclic trials (``seg1_adaptive``).
+SEG1_ADAPTIVE = False
 
 
 def corpus(n_trials: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -76,7 +79,14 @@ def corpus(n_trials: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def visprim_pipeline(times, angles, offsets):
     filtered = lowpass_concatenated(angles, offsets, order=ORDER, cutoff=CUTOFF)
-    seg = segment_concatenated(times, filtered, offsets, "seg1", min_change_deg=MIN_CHANGE_DEG)
+    seg = segment_concatenated(
+        times,
+        filtered,
+        offsets,
+        "seg1",
+        min_change_deg=MIN_CHANGE_DEG,
+        seg1_adaptive=SEG1_ADAPTIVE,
+    )
     starts, ends = seg.global_frames()
     vectors = kernels.resample_segments(filtered, starts, ends, n=N_SAMPLES)
     basis = fit_pca(vectors)
@@ -303,7 +313,9 @@ def stage_timings(times, angles, offsets) -> list[tuple[str, str, float]]:
     seg = timed(
         "ZVC+SEG-1",
         "visprim",
-        lambda: segment_concatenated(times, f1, offsets, "seg1", min_change_deg=MIN_CHANGE_DEG),
+        lambda: segment_concatenated(
+            times, f1, offsets, "seg1", min_change_deg=MIN_CHANGE_DEG, seg1_adaptive=SEG1_ADAPTIVE
+        ),
     )
     timed(
         "ZVC+SEG-1",

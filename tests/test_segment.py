@@ -294,3 +294,19 @@ def test_matching_is_maximum(found: list[float], truth: list[float], halves: lis
     else:
         best = 0
     assert S.boundary_matches(f, t, 0.1, truth_halfwidth=h)[0] == best
+
+
+def test_adaptive_seg1_window_is_half_the_median_gap_per_trial() -> None:
+    """Known answer: a trial's window is min(window, median / 2) of the gaps between
+    consecutive crossings of one DOF; a trial without such gaps keeps the window."""
+    from visprim.segment.seg1 import _trial_windows
+
+    # Trial 0: DOF 0 at 0, 0.2, 0.6 (gaps 0.2, 0.4), DOF 1 at 1.0, 1.1 (gap 0.1): median 0.2,
+    # window 0.1. Trial 2: DOF 3 at 0, 0.5, 0.8 (gaps 0.5, 0.3; an even count, so the mean of
+    # the middle two, 0.4): window 0.2. Trial 1: one crossing per DOF, no gap: the window
+    # itself (0.3). Crossings given out of order.
+    trial = np.array([2, 0, 0, 1, 0, 2, 0, 0, 1, 2])
+    dof = np.array([3, 0, 1, 0, 0, 3, 0, 1, 2, 3])
+    time = np.array([0.0, 0.2, 1.1, 5.0, 0.0, 0.5, 0.6, 1.0, 5.5, 0.8])
+    want = np.array([0.2, 0.1, 0.1, 0.3, 0.1, 0.2, 0.1, 0.1, 0.3, 0.2])
+    np.testing.assert_allclose(_trial_windows(trial, dof, time, 0.3), want, rtol=1e-12)

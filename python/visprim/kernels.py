@@ -320,9 +320,9 @@ def covariance(x: ArrayLike, *, n_threads: int | None = None) -> tuple[_F64, _F6
     """Mean and covariance, with divisor N (the paper's ``K``), of the rows of ``x``.
 
     Rows are centred by a shift in blocks before the product (no ``XᵀX - N μμᵀ``
-    cancellation), and only the lower half of ``Σ (x - μ)(x - μ)ᵀ`` is formed (faer's
-    triangular matrix product); the result is exactly symmetric and does not depend on the
-    number of threads.
+    cancellation), and only the lower half of ``Σ (x - μ)(x - μ)ᵀ`` is formed (a packed
+    AVX2+FMA kernel where the CPU has it, else faer's triangular matrix product); the result
+    is exactly symmetric and does not depend on the number of threads.
 
     Args:
         x: ``(N, d)`` float64, one observation per row (units kept: the covariance is in

@@ -7,32 +7,37 @@
 //! to rounding.
 //!
 //! The scatter matrix `Σ (x - mean)(x - mean)ᵀ` of a block of rows is computed on rows
-//! centred by a *shift* (the mean of the first rows of the block) in small sub-blocks, with
-//! faer's triangular matrix product (only the lower half of `YᵀY` is formed). The final
-//! correction `- n m mᵀ` (with `m` the mean of the shifted rows) is then tiny compared to the
-//! scatter, so data far from the origin (e.g. positions in metres around an offset) keeps its
-//! precision, unlike the textbook `XᵀX - n μμᵀ`.
+//! centred by a *shift* (the mean of the first rows of the block), forming only the lower half
+//! of `YᵀY`: with the packed AVX2+FMA kernel of [`crate::gram`] where the CPU has it and rows
+//! have at least 16 values, else with faer's triangular matrix product on small sub-blocks. The
+//! final correction `- n m mᵀ` (with `m` the mean of the shifted rows) is then tiny compared to
+//! the scatter, so data far from the origin (e.g. positions in metres around an offset) keeps
+//! its precision, unlike the textbook `XᵀX - n μμᵀ`.
 //!
-//! Parallelism: narrow rows (d < 128) are cut into a number of parts that depends only on `n`
-//! (never on the thread count), each part's scatter is computed sequentially and the parts are
-//! added in order; wide rows go through faer's product parallel over output blocks, whose
-//! per-element summation order does not depend on the split. Results are bit-identical for any
-//! number of rayon threads (tested).
+//! Parallelism: the rows are cut into a number of parts that depends only on `n` (never on the
+//! thread count), each part's scatter is computed sequentially and the parts are added in order
+//! (the pairwise update below). Without the packed kernel, wide rows (d ≥ 128) are instead one
+//! part through faer's product parallel over output blocks, whose per-element summation order
+//! does not depend on the split. Results are bit-identical for any number of rayon threads
+//! (tested).
 
 use faer::linalg::matmul::triangular::{matmul, BlockStructure};
 use faer::{Accum, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
-use crate::buffer;
+use crate::{buffer, gram};
 use crate::{Error, Result};
 
 /// Rows per centred sub-block fed to the matrix product (the block stays in L2 for d ≈ 400).
 const SUB_BLOCK_ROWS: usize = 512;
-/// Row width from which the product itself is parallel (instead of splitting the rows).
+/// Row width from which faer's product itself is parallel (instead of splitting the rows),
+/// when the packed kernel is not used.
 const WIDE: usize = 128;
 /// Minimum rows per parallel part, and the maximum number of parts.
 const MIN_PART_ROWS: usize = 2048;
 const MAX_PARTS: usize = 16;
+/// Row width from which the packed Gram kernel ([`gram`]) is used where the CPU has it.
+const GRAM_MIN_DIM: usize = 16;
 /// Rows averaged to form the shift.
 const SHIFT_ROWS: usize = 64;
 
@@ -64,30 +69,42 @@ impl Moments {
     /// Errors: `x.len() != n * dim` (Shape), a non-finite value (NonFinite). `n == 0` gives an
     /// empty accumulator.
     pub fn from_rows(x: &[f64], n: usize, dim: usize) -> Result<Self> {
-        check_rows(x, n, dim, "X")?;
+        // With the packed Gram kernel, non-finite values are noticed while the rows are packed
+        // (and located afterwards); otherwise by a pass of their own.
+        let packed = dim >= GRAM_MIN_DIM && gram::available();
+        if packed {
+            check_len(x, n, dim, "X")?;
+        } else {
+            check_rows(x, n, dim, "X")?;
+        }
         if n == 0 {
             return Self::new(dim);
         }
         scatter_len(dim)?;
-        // Wide rows: one part, faer's matrix product parallel over the output (its split never
-        // changes the summation order). Narrow rows: independent parts in parallel.
-        let wide = dim >= WIDE;
-        let (parts, par) = if wide {
+        // Wide rows without the packed kernel: one part, faer's matrix product parallel over
+        // the output (its split never changes the summation order). Otherwise: independent
+        // parts in parallel, their number set by `n` alone.
+        let (parts, par) = if dim >= WIDE && !packed {
             (1, Par::rayon(0))
         } else {
             (n.div_ceil(MIN_PART_ROWS).clamp(1, MAX_PARTS), Par::Seq)
         };
         let part_rows = n.div_ceil(parts);
-        let partials: Vec<Moments> = (0..parts)
+        let partials: Vec<(Moments, bool)> = (0..parts)
             .into_par_iter()
             .map(|p| {
                 let start = p * part_rows;
                 let end = ((p + 1) * part_rows).min(n);
-                block_moments(&x[start * dim..end * dim], end - start, dim, par)
+                block_moments(&x[start * dim..end * dim], end - start, dim, packed, par)
             })
             .collect::<Result<_>>()?;
+        if partials.iter().any(|(_, finite)| !finite) {
+            // A NaN or infinity (named by the check), or finite values whose products overflow
+            // (kept, as the textbook sums would).
+            check_rows(x, n, dim, "X")?;
+        }
         // The parts hold lower triangles only: merge those, mirror once.
-        let mut iter = partials.into_iter();
+        let mut iter = partials.into_iter().map(|(m, _)| m);
         let mut acc = iter.next().expect("at least one part");
         for part in iter {
             acc.merge_lower(&part);
@@ -255,13 +272,18 @@ pub fn covariance(x: &[f64], n: usize, d: usize) -> Result<(Vec<f64>, Vec<f64>)>
     Moments::from_rows(x, n, d)?.into_mean_covariance()
 }
 
-fn check_rows(x: &[f64], n: usize, dim: usize, name: &str) -> Result<()> {
+fn check_len(x: &[f64], n: usize, dim: usize, name: &str) -> Result<()> {
     if Some(x.len()) != n.checked_mul(dim) {
         return Err(Error::Shape(format!(
             "{name} has {} values, expected {n} rows x {dim} columns",
             x.len()
         )));
     }
+    Ok(())
+}
+
+fn check_rows(x: &[f64], n: usize, dim: usize, name: &str) -> Result<()> {
+    check_len(x, n, dim, name)?;
     if let Some(pos) = x.iter().position(|v| !v.is_finite()) {
         return Err(Error::NonFinite(format!(
             "{name} contains NaN or infinity (row {}, column {})",
@@ -297,10 +319,12 @@ fn mirror<const FROM_LOWER: bool>(a: &mut [f64], d: usize) {
     }
 }
 
-/// Sequential statistics of one block of rows (`n ≥ 1`).
+/// Sequential statistics of one block of rows (`n ≥ 1`), with the packed Gram kernel
+/// (`packed`) or faer's triangular product, and whether its sums are finite (always true for
+/// faer's path, whose input was checked).
 ///
 /// Errors: the `d × d` matrix cannot be allocated (Memory).
-fn block_moments(x: &[f64], n: usize, d: usize, par: Par) -> Result<Moments> {
+fn block_moments(x: &[f64], n: usize, d: usize, packed: bool, par: Par) -> Result<(Moments, bool)> {
     // Shift: mean of the first rows, close to the block mean for any reasonable data.
     let ns = n.min(SHIFT_ROWS);
     let mut shift = vec![0.0; d];
@@ -317,33 +341,11 @@ fn block_moments(x: &[f64], n: usize, d: usize, par: Par) -> Result<Moments> {
     // Σ y over the shifted rows y = x - shift.
     let mut gram = buffer::try_zeroed_f64(scatter_len(d)?, "the scatter matrix")?;
     let mut colsum = vec![0.0; d];
-    let mut buf = buffer::try_zeroed_f64(SUB_BLOCK_ROWS.min(n) * d, "a block of centred rows")?;
-    for (b, rows) in x.chunks(SUB_BLOCK_ROWS * d).enumerate() {
-        let nb = rows.len() / d;
-        let y = &mut buf[..rows.len()];
-        for (yrow, xrow) in y.chunks_exact_mut(d).zip(rows.chunks_exact(d)) {
-            for ((yv, xv), (s, c)) in yrow
-                .iter_mut()
-                .zip(xrow)
-                .zip(shift.iter().zip(colsum.iter_mut()))
-            {
-                *yv = xv - s;
-                *c += *yv;
-            }
-        }
-        let yr = MatRef::from_row_major_slice(&*y, nb, d);
-        let g = MatMut::from_column_major_slice_mut(&mut gram, d, d);
-        matmul(
-            g,
-            BlockStructure::TriangularLower,
-            if b == 0 { Accum::Replace } else { Accum::Add },
-            yr.transpose(),
-            BlockStructure::Rectangular,
-            yr,
-            BlockStructure::Rectangular,
-            1.0,
-            par,
-        );
+    let mut finite = true;
+    if packed {
+        finite = gram::shifted_gram_lower(x, n, d, &shift, &mut gram, &mut colsum)?;
+    } else {
+        faer_gram_lower(x, n, d, &shift, &mut gram, &mut colsum, par)?;
     }
 
     // gram is column-major lower: element (i, j), i ≥ j, at j * d + i, which is the row-major
@@ -359,12 +361,55 @@ fn block_moments(x: &[f64], n: usize, d: usize, par: Par) -> Result<Moments> {
     }
     mirror::<false>(&mut gram, d);
     let mean = shift.iter().zip(&m).map(|(s, mi)| s + mi).collect();
-    Ok(Moments {
+    let moments = Moments {
         dim: d,
         count: n as u64,
         mean,
         scatter: gram,
-    })
+    };
+    Ok((moments, finite))
+}
+
+/// Lower half of `Σ yyᵀ` (into `gram`, column-major) and `Σ y` (into `colsum`) over the
+/// shifted rows `y = x - shift`, by faer's triangular product on sub-blocks of centred rows.
+fn faer_gram_lower(
+    x: &[f64],
+    n: usize,
+    d: usize,
+    shift: &[f64],
+    gram: &mut [f64],
+    colsum: &mut [f64],
+    par: Par,
+) -> Result<()> {
+    let mut buf = buffer::try_zeroed_f64(SUB_BLOCK_ROWS.min(n) * d, "a block of centred rows")?;
+    for (b, rows) in x.chunks(SUB_BLOCK_ROWS * d).enumerate() {
+        let nb = rows.len() / d;
+        let y = &mut buf[..rows.len()];
+        for (yrow, xrow) in y.chunks_exact_mut(d).zip(rows.chunks_exact(d)) {
+            for ((yv, xv), (s, c)) in yrow
+                .iter_mut()
+                .zip(xrow)
+                .zip(shift.iter().zip(colsum.iter_mut()))
+            {
+                *yv = xv - s;
+                *c += *yv;
+            }
+        }
+        let yr = MatRef::from_row_major_slice(&*y, nb, d);
+        let g = MatMut::from_column_major_slice_mut(gram, d, d);
+        matmul(
+            g,
+            BlockStructure::TriangularLower,
+            if b == 0 { Accum::Replace } else { Accum::Add },
+            yr.transpose(),
+            BlockStructure::Rectangular,
+            yr,
+            BlockStructure::Rectangular,
+            1.0,
+            par,
+        );
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -494,6 +539,34 @@ mod tests {
             let one = run(1);
             assert_eq!(one, run(2));
             assert_eq!(one, run(3));
+        }
+    }
+
+    #[test]
+    fn packed_kernel_and_faer_agree() {
+        if !gram::available() {
+            return;
+        }
+        for &(n, d) in &[(1usize, 16usize), (700, 16), (3000, 41), (1000, 400)] {
+            let mut x = values(n * d, (n + d) as u64);
+            x.iter_mut().for_each(|v| *v += 3.0);
+            let (packed, ok) = block_moments(&x, n, d, true, Par::Seq).unwrap();
+            let (plain, _) = block_moments(&x, n, d, false, Par::Seq).unwrap();
+            assert!(ok);
+            assert_close(packed.mean(), plain.mean(), 1e-14);
+            assert_close(packed.scatter(), plain.scatter(), 1e-13);
+        }
+    }
+
+    #[test]
+    fn non_finite_values_are_located_on_every_path() {
+        for d in [3usize, 16, 40] {
+            let n = 5000;
+            let mut x = values(n * d, 5);
+            x[4321 * d + 2] = f64::INFINITY;
+            let err = covariance(&x, n, d).unwrap_err();
+            assert!(matches!(err, Error::NonFinite(_)), "{err}");
+            assert!(err.to_string().contains("row 4321, column 2"), "{err}");
         }
     }
 

@@ -10,6 +10,7 @@ pub mod checks;
 pub mod clock;
 pub mod filter;
 pub mod gradient;
+pub mod gram;
 pub mod lanes;
 pub mod ragged;
 pub mod resample;

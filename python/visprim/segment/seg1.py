@@ -65,12 +65,15 @@ def _trial_windows(
     gaps, gap_trial = np.diff(t)[same], tr[1:][same]
     if gaps.size == 0:
         return out
-    by = np.argsort(gap_trial, kind="stable")
+    # Median gap of each trial, all trials at once: gaps sorted by (trial, gap), then the
+    # middle one (or the mean of the middle two) of each trial's run.
+    by = np.lexsort((gaps, gap_trial))
     gaps, gap_trial = gaps[by], gap_trial[by]
-    trials, first = np.unique(gap_trial, return_index=True)
-    halves = np.array([np.median(g) for g in np.split(gaps, first[1:])])
-    per_trial = dict(zip(trials.tolist(), np.minimum(window, 0.5 * halves).tolist(), strict=True))
-    return np.array([per_trial.get(k, window) for k in trial.tolist()])
+    trials, first, counts = np.unique(gap_trial, return_index=True, return_counts=True)
+    medians = 0.5 * (gaps[first + (counts - 1) // 2] + gaps[first + counts // 2])
+    per_trial = np.full(int(trial.max()) + 1, float(window))
+    per_trial[trials] = np.minimum(window, 0.5 * medians)
+    return per_trial[trial]
 
 
 def seg1_events(
