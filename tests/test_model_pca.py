@@ -64,3 +64,25 @@ def test_errors():
         b.components(7)
     with pytest.raises(ValueError, match=r"shape \(N, 6\)"):
         b.project(np.zeros((2, 5)), 2)
+
+
+@pytest.mark.parametrize(("n", "d", "keep"), [(40, 300, 10), (40, 300, 60), (12, 12, 0)])
+def test_fewer_vectors_than_dimensions_match_the_covariance(n, d, keep):
+    """N ≤ d goes through the Gram matrix: the same eigenvalues and leading eigenvectors as
+    numpy's eigh of the covariance, at least ``keep`` orthonormal eigenvectors, and a
+    null space completed on demand, orthogonal to the data's span."""
+    rng = np.random.default_rng(n + d + keep)
+    x = rng.standard_normal((n, d)) * np.linspace(3.0, 0.1, d) + 2.0
+    basis = fit_pca(x, n_keep=keep)
+    cov = np.cov(x.T, bias=True)
+    w, v = np.linalg.eigh(cov)
+    w, v = w[::-1], v[:, ::-1]
+    np.testing.assert_allclose(basis.eigenvalues, np.clip(w, 0.0, None), atol=1e-10)
+    m = basis.eigenvectors.shape[1]
+    assert min(d, max(n - 1, keep)) <= m <= d
+    top = basis.eigenvectors[:, :5]
+    np.testing.assert_allclose(np.abs(top.T @ v[:, :5]), np.eye(5), atol=1e-8)
+    e = basis.components(d)
+    np.testing.assert_allclose(e.T @ e, np.eye(d), atol=1e-10)
+    centred = x - x.mean(axis=0)
+    np.testing.assert_allclose(centred @ e[:, n - 1 :], 0.0, atol=1e-9)
