@@ -118,6 +118,28 @@ def test_evaluate_benchmark_on_synthetic_movements(tmp_path: Path) -> None:
     assert len(paths["predictions"].read_text().splitlines()) == 10
 
 
+def test_two_arm_movements_are_rebuilt_arm_by_arm() -> None:
+    """Each arm is rebuilt from one-arm primitives learned from both arms: the resting left
+    arm of these movements is easy to rebuild, so the movement error falls against the
+    two-arm primitives that must cut both arms at the same times."""
+    data, labels = movements(3, seed=1)
+    recs = [
+        Recording(Path(f"m{i}.bvh"), lab, "", f"g{i // 3}", "", "synthetic")
+        for i, lab in enumerate(labels)
+    ]
+    bench = make_benchmarks(recs, data)[0][0]
+    clf = MotionClassifier(model_params=SMALL_MODEL)
+    each = evaluate_benchmark(bench, classifier=clf)
+    joint = evaluate_benchmark(bench, classifier=clf, reconstruction="joint")
+    assert (each.reconstruction, joint.reconstruction) == ("each arm", "joint")
+    assert each.accuracy == joint.accuracy and each.n_arm_trials == joint.n_arm_trials == 9
+    assert 0.0 < each.movement_rms_deg < joint.movement_rms_deg
+    assert "one-arm primitives learned from both arms" in to_markdown([each])
+    assert "one-arm primitives" not in to_markdown([joint])
+    with pytest.raises(ValueError, match="reconstruction must be one of"):
+        evaluate_benchmark(bench, classifier=clf, reconstruction="left")
+
+
 def test_cli_on_bandai_recordings(shared_data: Path, tmp_path: Path) -> None:
     """`visprim evaluate` end to end on the 34 original Bandai dataset-2 takes (labels from
     the file names; 4 gestures, leave one of 7 styles out)."""
@@ -146,6 +168,13 @@ def test_cli_methods_match_the_classifier() -> None:
     from visprim.cli.evaluate import METHODS
 
     assert METHODS == MOTION_METHODS
+
+
+def test_cli_reconstructions_match_the_library() -> None:
+    from visprim.cli.evaluate import RECONSTRUCTIONS as CLI
+    from visprim.evaluate import RECONSTRUCTIONS
+
+    assert CLI == RECONSTRUCTIONS
 
 
 def test_read_movements_reads_the_arm_asked_for(shared_data: Path) -> None:

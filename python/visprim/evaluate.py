@@ -29,7 +29,12 @@ takes of the same corpus). In each benchmark:
   rebuilt from its primitive's centre) as an RMS angle error in degrees (per bone
   direction for direction features, per angle sample for Z-Y-Z angles), at k = 30 and
   k = 100 primitives; and the whole-movement RMS angle between the bone directions of each
-  movement and of its rebuilding from consecutive segments' primitives (k = 30).
+  movement and of its rebuilding from consecutive segments' primitives (k = 30). Two-arm
+  movements are rebuilt arm by arm from one-arm primitives learned from both arms of the
+  training groups (:func:`~visprim.trial.split_arms`; the left arm mirrored), as the
+  paper's primitives are one arm's: each arm is segmented on its own and a segment is one
+  arm's stroke. ``reconstruction="joint"`` uses the classifier's two-arm primitives
+  instead.
 
 Every number is computed on held-out groups: nothing is tuned on the group being scored.
 """
@@ -56,7 +61,7 @@ from visprim.accuracy import angular_error_deg
 from visprim.classify import MotionClassifier, arm_directions, dtw_matrix
 from visprim.features import from_angles
 from visprim.segment.coverage import DEFAULT_MOVING_SPEED, segment_coverage
-from visprim.trial import Trial
+from visprim.trial import Trial, split_arms
 
 __all__ = [
     "GROUP_COLUMNS",
@@ -77,6 +82,8 @@ GROUP_COLUMNS: tuple[str, ...] = ("subject", "style", "take")
 MOVING_SPEED: float = DEFAULT_MOVING_SPEED
 #: Primitive counts of the reconstruction table.
 RECONSTRUCTION_K: tuple[int, ...] = (30, 100)
+#: Which primitives rebuild two-arm movements (:func:`evaluate_benchmark`).
+RECONSTRUCTIONS: tuple[str, ...] = ("each-arm", "joint")
 #: Frame period every recording is resampled to (s), as in the method (34 ms).
 DEFAULT_PERIOD: float = 0.034
 
@@ -282,6 +289,9 @@ class BenchmarkResult:
     labels: NDArray[Any]
     group_values: NDArray[Any]
     names: list[str]
+    #: How held-out segments were rebuilt: ``"one arm"`` (one-arm movements), ``"each arm"``
+    #: or ``"joint"`` (two-arm movements, see :func:`evaluate_benchmark`).
+    reconstruction: str = "one arm"
 
 
 def _choose_group(recordings: Sequence[Recording], group_by: str | None) -> str:
@@ -328,10 +338,23 @@ def evaluate_benchmark(
     *,
     classifier: MotionClassifier | None = None,
     on_fold: Callable[[str], None] | None = None,
+    reconstruction: str = "each-arm",
 ) -> BenchmarkResult:
     """Leave-one-group-out classification, segmentation and reconstruction of one
-    benchmark (see the module docstring)."""
+    benchmark (see the module docstring).
+
+    ``reconstruction`` is which primitives rebuild the held-out segments of two-arm
+    movements: ``"each-arm"`` (default), one-arm primitives learned from both arms
+    (:func:`~visprim.trial.split_arms`), each arm segmented and rebuilt on its own; or
+    ``"joint"``, the classifier's two-arm primitives, both arms cut at the same times.
+    """
+    if reconstruction not in RECONSTRUCTIONS:
+        raise ValueError(
+            f"reconstruction must be one of {', '.join(RECONSTRUCTIONS)}, got {reconstruction!r}"
+        )
     from sklearn.base import clone
+
+    from visprim.model import PrimitiveModel
 
     y = bench.labels
     g = bench.groups
@@ -343,6 +366,7 @@ def evaluate_benchmark(
             "groups"
         )
     template = classifier if classifier is not None else MotionClassifier()
+    per_arm = reconstruction == "each-arm" and bench.movements[0].n_arms > 1
     seconds = {"classifier": 0.0, "baseline": 0.0, "segmentation": 0.0, "reconstruction": 0.0}
 
     t0 = time.perf_counter()
@@ -375,14 +399,20 @@ def evaluate_benchmark(
         model = clf.model_
         thresholds[group] = float(getattr(model, "seg2_threshold_", None) or float("nan"))
         t0 = time.perf_counter()
-        arm_trials = [bench.movements[i] for i in test]
-        corpus = model.prepare(arm_trials, tune_seg2=False)
-        per_trial = corpus.segments
-        seg_counts.extend(int(segs.shape[0]) for segs in per_trial)
-        coverage.extend(segment_coverage(arm_trials, per_trial).tolist())
+        held_out = [bench.movements[i] for i in test]
+        corpus = model.prepare(held_out, tune_seg2=False)
+        seg_counts.extend(int(segs.shape[0]) for segs in corpus.segments)
+        coverage.extend(segment_coverage(held_out, corpus.segments).tolist())
         seconds["segmentation"] += time.perf_counter() - t0
 
         t0 = time.perf_counter()
+        if per_arm:
+            # One-arm primitives learned from both arms of the training groups.
+            model = PrimitiveModel(**model.get_params()).fit(
+                split_arms([bench.movements[i] for i in train])
+            )
+            held_out = split_arms(held_out)
+            corpus = model.prepare(held_out, tune_seg2=False)
         if corpus.segmentation.n_segments:
             vectors = model.vectorize(corpus).vectors
             # Directions: 3 channels per bone, so the RMS angle of a bone direction is
@@ -402,7 +432,7 @@ def evaluate_benchmark(
                 s, n = _total_error_deg(model, vectors, centers)
                 sq[k] += s
                 n_vec[k] += n
-        for t, segs in zip(arm_trials, per_trial, strict=True):
+        for t, segs in zip(held_out, corpus.segments, strict=True):
             if segs.shape[0] == 0:
                 continue
             try:
@@ -449,6 +479,9 @@ def evaluate_benchmark(
         labels=y,
         group_values=g,
         names=[r.path.name for r in bench.recordings],
+        reconstruction=(
+            "one arm" if bench.movements[0].n_arms == 1 else reconstruction.replace("-", " ")
+        ),
     )
 
 
@@ -505,18 +538,25 @@ def evaluate(
     classifier: MotionClassifier | None = None,
     period: float = DEFAULT_PERIOD,
     arm: str = "both",
+    reconstruction: str = "each-arm",
     jobs: int | None = None,
     progress: bool | None = None,
 ) -> tuple[list[BenchmarkResult], list[str]]:
     """Run the benchmark on the labelled recordings under ``sources`` (module docstring).
 
-    ``arm`` is the arm(s) read from each recording (:func:`read_movements`). Returns
+    ``arm`` is the arm(s) read from each recording (:func:`read_movements`);
+    ``reconstruction`` the primitives that rebuild two-arm movements
+    (:func:`evaluate_benchmark`). Returns
     ``(one result per benchmark, notes)``; the notes say what was left out.
     """
     from tqdm.auto import tqdm
 
     from visprim.progress import _disable
 
+    if reconstruction not in RECONSTRUCTIONS:
+        raise ValueError(
+            f"reconstruction must be one of {', '.join(RECONSTRUCTIONS)}, got {reconstruction!r}"
+        )
     disable = _disable() if progress is None else not progress
     recordings, unlabelled = find_recordings(sources, labels)
     notes = []
@@ -545,7 +585,11 @@ def evaluate(
             bar.set_postfix_str(name)
 
         for b in benches:
-            results.append(evaluate_benchmark(b, classifier=classifier, on_fold=step))
+            results.append(
+                evaluate_benchmark(
+                    b, classifier=classifier, on_fold=step, reconstruction=reconstruction
+                )
+            )
             bar.update(len(set(b.groups.tolist())))
     return results, notes
 
@@ -587,6 +631,7 @@ def summary_rows(results: Sequence[BenchmarkResult]) -> list[dict[str, Any]]:
                     for k in RECONSTRUCTION_K
                 },
                 "movement_rms_deg": round(r.movement_rms_deg, 2),
+                "reconstruction": r.reconstruction,
                 "seconds": round(sum(r.seconds.values()), 2),
             }
         )
@@ -624,6 +669,12 @@ def to_markdown(results: Sequence[BenchmarkResult], notes: Sequence[str] = ()) -
         "direction for direction features, per angle sample for Z-Y-Z angles); movement "
         "RMS: median over held-out trials of the RMS angle between the bone directions of "
         "the movement and of its rebuilding from its segments' primitives (k = 30)."
+        + (
+            " Two-arm movements: each arm segmented and rebuilt from one-arm primitives "
+            "learned from both arms of the training groups (the left arm mirrored)."
+            if any(r.reconstruction == "each arm" for r in results)
+            else ""
+        )
     )
     for r in results:
         out += ["", f"## {r.name}", ""]

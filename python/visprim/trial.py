@@ -9,7 +9,8 @@ orientation per frame and inverse kinematics uses it instead of the world axes.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -174,3 +175,49 @@ class Trial:
             f"Trial({self.name!r}, {self.n_frames} frames, {self.duration:.2f} s, "
             f"repetitions={self.repetitions}{extra})"
         )
+
+
+#: Reflection through the body's sagittal plane in body coordinates (y, the body's left,
+#: changes sign); the same reflection as ``visprim.io.read(..., mirror=True)``.
+_MIRROR_Y: NDArray[np.float64] = np.diag([1.0, -1.0, 1.0])
+
+
+def split_arms(trials: Trial | Sequence[Trial]) -> list[Trial]:
+    """One-arm trials of each trial's arms, in order: a two-arm trial gives its right arm,
+    then its left arm reflected through the body's sagittal plane so that it moves like a
+    right arm (as ``visprim.io.read(path, "left", mirror=True)`` reads it).
+
+    A model fitted on the result has one-arm primitives learned from both arms (twice the
+    segments) that can rebuild either arm. One-arm trials are returned as they are. Names
+    get ``"_right"``/``"_left"``, ``meta["arm"]`` says which arm each came from, and the
+    split trials carry no ``truth``.
+    """
+    items = [trials] if isinstance(trials, Trial) else list(trials)
+    out: list[Trial] = []
+    for t in items:
+        if t.n_arms == 1:
+            out.append(t)
+            continue
+        for a, side in enumerate(t.arms):
+            markers = t.markers[:, 4 * a : 4 * a + 4]
+            joints = None if t.joints is None else t.joints[:, 3 * a : 3 * a + 3]
+            frame = t.body_frame
+            if side == "left":
+                # A reflection of the points through the body's sagittal plane: y → −y in
+                # body coordinates, R D Rᵀ in the recording frame (D = diag(1, −1, 1)).
+                r = np.broadcast_to(np.eye(3), (t.n_frames, 3, 3)) if frame is None else frame
+                reflect = r @ _MIRROR_Y @ np.swapaxes(r, 1, 2)
+                markers = np.einsum("tij,tmj->tmi", reflect, markers)
+                joints = None if joints is None else np.einsum("tij,tmj->tmi", reflect, joints)
+            out.append(
+                replace(
+                    t,
+                    markers=markers,
+                    joints=joints,
+                    name=f"{t.name}_{side}",
+                    meta={**t.meta, "arm": side},
+                    arms=("right",),
+                    truth=None,
+                )
+            )
+    return out

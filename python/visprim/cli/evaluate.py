@@ -25,6 +25,7 @@ def run(args: argparse.Namespace) -> int:
             classifier=MotionClassifier(method=args.method, band=args.band, step=args.step),
             period=args.resample,
             arm=args.arm,
+            reconstruction=args.reconstruction,
             jobs=args.jobs,
         )
     except ValueError as exc:
@@ -44,6 +45,8 @@ def run(args: argparse.Namespace) -> int:
 #: :data:`visprim.classify.MOTION_METHODS`, spelt out so that building the parser does not
 #: import scikit-learn (a test checks they agree).
 METHODS = ("combined", "frames", "coordinates", "segments", "histogram")
+#: :data:`visprim.evaluate.RECONSTRUCTIONS` (a test checks they agree).
+RECONSTRUCTIONS = ("each-arm", "joint")
 
 
 def register(sub: Any) -> None:
@@ -88,6 +91,13 @@ def register(sub: Any) -> None:
         choices=("right", "left", "both"),
         default="both",
         help="arms to read and model (default both; marker CSV files hold the right arm)",
+    )
+    p.add_argument(
+        "--reconstruction",
+        choices=RECONSTRUCTIONS,
+        default="each-arm",
+        help="primitives that rebuild two-arm movements: one-arm primitives learned from both "
+        "arms (default) or the classifier's two-arm primitives",
     )
     p.add_argument(
         "--resample", type=float, default=0.034, help="frame period in seconds (default 0.034)"
