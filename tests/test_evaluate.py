@@ -105,7 +105,7 @@ def test_evaluate_benchmark_on_synthetic_movements(tmp_path: Path) -> None:
     assert res.reconstruction_deg == {}
     md = to_markdown([res], ["a note"])
     assert "| synthetic | 3 subject | 9 | 3 | **1.000** | 1.000 |" in md
-    assert "| - | - |" in md
+    assert "| - | - | - | - |" in md
     assert "- a note" in md
     page = to_html(md)
     assert page.count("<table>") == 3 and "<b>1.000</b>" in page

@@ -23,6 +23,7 @@ DEFAULTS = {
     "seg2_tuning": "robust",
     "features": "directions",
     "offsets": "mean",
+    "amplitude": False,
     "n_samples": 100,
     "n_components": 30,
     "n_clusters": 30,
@@ -317,3 +318,33 @@ def test_real_recordings_segments_are_within_a_turn_and_movements_follow_their_a
     assert math.degrees(np.sqrt(np.mean((rec - orig) ** 2))) < 1.0
     _, rec_c = m.reconstruct_movement(trial, source="cluster")
     assert np.max(np.abs(rec_c - orig)) < np.pi
+
+
+def test_amplitude_scales_the_primitive_to_the_segment() -> None:
+    """Fitted on three curve shapes (with small noise), a segment 1.7 times as large as one
+    of them is rebuilt as 1.7 times its primitive with ``amplitude=True``, as the
+    primitive itself without."""
+    rng = np.random.default_rng(0)
+    s = np.linspace(0.0, 1.0, 100)
+    shapes = np.stack(
+        [
+            np.concatenate([np.sin(np.pi * s), 0.5 * np.cos(np.pi * s), s - 0.5, 0 * s]),
+            np.concatenate([0 * s, np.sin(2 * np.pi * s), 0 * s, 0.3 * np.cos(np.pi * s)]),
+            np.concatenate([np.cos(np.pi * s), 0 * s, 0.4 * np.sin(3 * np.pi * s), s - 0.5]),
+        ]
+    )
+    train = np.repeat(shapes, 20, axis=0) + rng.normal(0.0, 0.01, (60, 400))
+    params = dict(features="zyz", n_components=10, n_clusters=3, seed=0)
+    plain = PrimitiveModel(**params).fit(train)
+    scaled = PrimitiveModel(amplitude=True, **params).fit(train)
+    segment = 1.7 * shapes[1:2]
+    want = to_curves(segment, 4)
+    got = scaled.reconstruct(segment, source="cluster")
+    np.testing.assert_allclose(got, want, atol=0.02)
+    np.testing.assert_allclose(plain.reconstruct(segment, source="cluster"), want / 1.7, atol=0.02)
+    # The projection itself is not scaled.
+    np.testing.assert_array_equal(
+        scaled.reconstruct(segment), plain.reconstruct(segment, source="projection")
+    )
+    with pytest.raises(ValueError, match="amplitude"):
+        PrimitiveModel(amplitude=True, offsets="turns").fit(train)

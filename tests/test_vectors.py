@@ -232,3 +232,14 @@ def test_mean_offsets_keep_shape_apart_and_add_back_exactly():
     np.testing.assert_allclose(shape.offsets, to_curves(reference, 4).mean(axis=1))
     with pytest.raises(ValueError, match="offsets must be one of"):
         vectors_from_frames(angles, [0.0], [5.0], **{**args, "trial": [0]}, offsets="x")
+
+
+def test_amplitude_gains_are_least_squares_and_never_negative() -> None:
+    from visprim.vectors import amplitude_gains
+
+    r = np.array([[1.0, 2.0, -1.0], [0.5, 0.0, 0.5], [0.0, 0.0, 0.0], [1.0, 1.0, 0.0]])
+    s = np.array([[2.0, 4.0, -2.0], [-1.0, 0.0, -1.0], [3.0, 1.0, 0.0], [2.0, 0.0, 5.0]])
+    # 2 r exactly; −2 r clipped to 0; a zero rebuild keeps gain 1; (2 + 0) / 2 = 1.
+    np.testing.assert_allclose(amplitude_gains(s, r), [2.0, 0.0, 1.0, 1.0])
+    with pytest.raises(ValueError, match="must be equal"):
+        amplitude_gains(s[:, :2], r)

@@ -282,6 +282,9 @@ class BenchmarkResult:
     coverage_min: float
     seg2_thresholds: dict[str, float]
     reconstruction_deg: dict[int, float]
+    #: Total error with each segment's primitive scaled by its least-squares amplitude
+    #: (``PrimitiveModel(amplitude=True)``; posture-relative vectors only).
+    amplitude_deg: dict[int, float]
     movement_rms_deg: float
     seconds: dict[str, float]
     predictions: NDArray[Any]
@@ -313,15 +316,16 @@ def _confusion(classes: list[str], truth: NDArray[Any], pred: NDArray[Any]) -> N
     return m
 
 
-def _total_error_deg(
-    model: Any, vectors: NDArray[np.float64], centers: NDArray[np.float64]
-) -> tuple[float, int]:
-    """Mean squared error of rebuilding ``vectors`` from their nearest of ``centers``."""
-    p = model.transform(vectors)
-    labels, _ = kernels.kmeans_predict(np.ascontiguousarray(p), centers)
-    rec = centers[np.asarray(labels)] @ model.components_.T + model.mean_
-    diff = vectors - rec
-    return float(np.einsum("ij,ij->", diff, diff)), int(vectors.shape[0])
+def _total_error_sq(
+    model: Any, vectors: NDArray[np.float64], centers: NDArray[np.float64], amplitude: bool
+) -> float:
+    """Summed squared error of rebuilding ``vectors`` from their nearest of ``centers``,
+    scaled by their amplitude when ``amplitude``."""
+    from visprim.model import rebuild_from_centers
+
+    rebuilt = rebuild_from_centers(model, vectors, centers, amplitude=amplitude)
+    diff = vectors - rebuilt
+    return float(np.einsum("ij,ij->", diff, diff))
 
 
 def _direction_rms_deg(angles: NDArray[np.float64], reference: NDArray[np.float64]) -> float:
@@ -379,6 +383,8 @@ def evaluate_benchmark(
     coverage: list[float] = []
     thresholds: dict[str, float] = {}
     sq = {k: 0.0 for k in RECONSTRUCTION_K}
+    sq_amp = {k: 0.0 for k in RECONSTRUCTION_K}
+    n_amp = {k: 0 for k in RECONSTRUCTION_K}
     n_vec = {k: 0 for k in RECONSTRUCTION_K}
     rms: list[float] = []
     dims = [0]
@@ -429,9 +435,11 @@ def evaluate_benchmark(
                     )
                 else:
                     continue
-                s, n = _total_error_deg(model, vectors, centers)
-                sq[k] += s
-                n_vec[k] += n
+                sq[k] += _total_error_sq(model, vectors, centers, bool(model.amplitude))
+                n_vec[k] += vectors.shape[0]
+                if model.offsets == "mean":
+                    sq_amp[k] += _total_error_sq(model, vectors, centers, True)
+                    n_amp[k] += vectors.shape[0]
         for t, segs in zip(held_out, corpus.segments, strict=True):
             if segs.shape[0] == 0:
                 continue
@@ -471,6 +479,11 @@ def evaluate_benchmark(
         seg2_thresholds=thresholds,
         reconstruction_deg={
             k: angular_error_deg(sq[k] / n_vec[k], dims[0]) for k in RECONSTRUCTION_K if n_vec[k]
+        },
+        amplitude_deg={
+            k: angular_error_deg(sq_amp[k] / n_amp[k], dims[0])
+            for k in RECONSTRUCTION_K
+            if n_amp[k]
         },
         movement_rms_deg=float(np.median(rms)) if rms else float("nan"),
         seconds=seconds,
@@ -630,6 +643,10 @@ def summary_rows(results: Sequence[BenchmarkResult]) -> list[dict[str, Any]]:
                     f"total_error_deg_k{k}": round(r.reconstruction_deg.get(k, float("nan")), 2)
                     for k in RECONSTRUCTION_K
                 },
+                **{
+                    f"amplitude_error_deg_k{k}": round(r.amplitude_deg.get(k, float("nan")), 2)
+                    for k in RECONSTRUCTION_K
+                },
                 "movement_rms_deg": round(r.movement_rms_deg, 2),
                 "reconstruction": r.reconstruction,
                 "seconds": round(sum(r.seconds.values()), 2),
@@ -646,9 +663,11 @@ def to_markdown(results: Sequence[BenchmarkResult], notes: Sequence[str] = ()) -
         "| benchmark | groups | trials | classes | MotionClassifier | DTW 1-NN baseline | "
         "segments / trial | no segment | coverage median (min) | SEG-2 c per fold | "
         + " | ".join(f"total error k={k}" for k in RECONSTRUCTION_K)
+        + " | "
+        + " | ".join(f"× amplitude k={k}" for k in RECONSTRUCTION_K)
         + " | movement RMS |"
     )
-    out.append("|" + "---|" * (10 + len(RECONSTRUCTION_K) + 1))
+    out.append("|" + "---|" * (10 + 2 * len(RECONSTRUCTION_K) + 1))
     for r in results:
         cs = ", ".join(f"{v:.3g}" for v in r.seg2_thresholds.values())
         out.append(
@@ -657,6 +676,8 @@ def to_markdown(results: Sequence[BenchmarkResult], notes: Sequence[str] = ()) -
             f"{r.trials_without_segments}/{r.n_arm_trials} | {_pct(r.coverage_median)} "
             f"({_pct(r.coverage_min)}) | {cs} (rad/s)² | "
             + " | ".join(_deg(r.reconstruction_deg.get(k, float("nan"))) for k in RECONSTRUCTION_K)
+            + " | "
+            + " | ".join(_deg(r.amplitude_deg.get(k, float("nan"))) for k in RECONSTRUCTION_K)
             + f" | {_deg(r.movement_rms_deg)} |"
         )
     out.append("")
@@ -666,7 +687,9 @@ def to_markdown(results: Sequence[BenchmarkResult], notes: Sequence[str] = ()) -
         "trials labelled right. Coverage: fraction of moving frames (wrist faster than "
         f"{MOVING_SPEED} m/s relative to the shoulder) inside a segment. Total error: RMS "
         "angle error of each held-out segment rebuilt from its nearest primitive (per bone "
-        "direction for direction features, per angle sample for Z-Y-Z angles); movement "
+        "direction for direction features, per angle sample for Z-Y-Z angles); × amplitude: "
+        "the same with each primitive scaled by the segment's least-squares gain (one more "
+        "number per segment, PrimitiveModel(amplitude=True)); movement "
         "RMS: median over held-out trials of the RMS angle between the bone directions of "
         "the movement and of its rebuilding from its segments' primitives (k = 30)."
         + (

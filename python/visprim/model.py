@@ -43,11 +43,18 @@ from visprim.pca import PCABasis, fit_pca
 from visprim.preprocess import PreparedCorpus, prepare_corpus
 from visprim.segment.seg2 import TUNINGS
 from visprim.trial import Trial
-from visprim.vectors import OFFSETS, SegmentVectors, stretch, to_curves, vectors_from_frames
+from visprim.vectors import (
+    OFFSETS,
+    SegmentVectors,
+    amplitude_gains,
+    stretch,
+    to_curves,
+    vectors_from_frames,
+)
 
 Source = Literal["projection", "cluster"]
 
-__all__ = ["PrimitiveModel"]
+__all__ = ["PrimitiveModel", "rebuild_from_centers"]
 
 
 class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
@@ -88,6 +95,12 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         movement and a segment is rebuilt from its primitive placed at the segment's own
         mean posture (C numbers per segment); or the absolute curves with only whole turns
         of γ and α removed (the paper: a primitive also fixes where the arm is).
+    amplitude : bool
+        Rebuild a segment from its primitive scaled by the least-squares gain ``a ≥ 0``
+        that fits the segment's own shape best (:func:`visprim.vectors.amplitude_gains`;
+        one more number per segment beside its duration and posture), so that one primitive
+        serves the same movement made larger or smaller. Only with ``offsets="mean"``
+        (default False: the primitive as it is).
     n_samples : int
         Samples per channel in a segment vector (default 100; vectors are ``C n_samples``-D,
         C channels per frame: 4 or 6 per arm, see ``features``).
@@ -174,6 +187,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         seg2_tuning: str = "robust",
         features: str = "directions",
         offsets: str = "mean",
+        amplitude: bool = False,
         n_samples: int = 100,
         n_components: int = 30,
         n_clusters: int = 30,
@@ -192,6 +206,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         self.seg2_tuning = seg2_tuning
         self.features = features
         self.offsets = offsets
+        self.amplitude = amplitude
         self.n_samples = n_samples
         self.n_components = n_components
         self.n_clusters = n_clusters
@@ -231,6 +246,10 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
             raise bad("features", f"must be one of {list(FEATURES)}")
         if self.offsets not in OFFSETS:
             raise bad("offsets", f"must be one of {list(OFFSETS)}")
+        if not isinstance(self.amplitude, (bool, np.bool_)):
+            raise bad("amplitude", "must be True or False")
+        if self.amplitude and self.offsets != "mean":
+            raise bad("amplitude", "scales posture-relative shapes: needs offsets='mean'")
         if not is_int(self.n_samples) or self.n_samples < 2:
             raise bad("n_samples", "must be an integer >= 2")
         d = n_channels(self.features) * int(self.n_samples)
@@ -599,18 +618,17 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         """
         self._check_fitted()
         x, sv = self._segment_vectors_of(X)
-        rec = self._reconstruct_vectors(self.basis_.project(x, int(self.n_components)), source)
+        rec = self._reconstruct_vectors(x, source)
         curves = to_curves(rec, self.n_channels) if sv is None else sv.to_trial_angles(rec)
         return self._to_angles(curves)
 
-    def _reconstruct_vectors(self, p: NDArray[np.float64], source: Source) -> NDArray[np.float64]:
+    def _reconstruct_vectors(self, x: NDArray[np.float64], source: Source) -> NDArray[np.float64]:
+        """Segment vectors ``x`` (N, d) rebuilt from their projections or primitives."""
         if source == "projection":
-            q = p
-        elif source == "cluster":
-            q = self.cluster_centers_[self.assign(p)[0]]
-        else:
+            return self.basis_.project(x, int(self.n_components)) @ self.components_.T + self.mean_
+        if source != "cluster":
             raise ValueError(f"source must be 'projection' or 'cluster', got {source!r}")
-        return q @ self.components_.T + self.mean_
+        return rebuild_from_centers(self, x, self.cluster_centers_)
 
     def primitive_angles(self, k: int) -> NDArray[np.float64]:
         """Primitive ``k`` (its cluster centre) as angle curves, (n_samples, 4 n_arms)
@@ -651,7 +669,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         segments = corpus.segments[0]
         times = corpus.times_all
         sv = self.vectorize(corpus)
-        curves = sv.to_trial_angles(self._reconstruct_vectors(self.transform(sv.vectors), source))
+        curves = sv.to_trial_angles(self._reconstruct_vectors(sv.vectors, source))
         mask = (times >= segments[0, 0]) & (times <= segments[-1, 1])
         out_t = times[mask]
         # Segment j covers [start_j, end_j); the last one also its end.
@@ -700,7 +718,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
             periodic_channels=periodic_channels(str(self.features), a.shape[1] // 4),
             offsets=str(self.offsets),
         )
-        curve = sv.to_trial_angles(self._reconstruct_vectors(self.transform(sv.vectors), source))[0]
+        curve = sv.to_trial_angles(self._reconstruct_vectors(sv.vectors, source))[0]
         mask = (t >= start) & (t <= end)
         out = stretch(curve, start, end, t[mask])
         if self.features != "zyz":
@@ -949,9 +967,28 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         """
         self._check_fitted()
         x, _ = self._segment_vectors_of(X)
-        p = self.basis_.project(x, int(self.n_components))
-        rebuilt = self._reconstruct_vectors(p, "cluster")
+        rebuilt = self._reconstruct_vectors(x, "cluster")
         return -float(np.mean(np.sum((x - rebuilt) ** 2, axis=1)))
+
+
+def rebuild_from_centers(
+    model: PrimitiveModel,
+    vectors: ArrayLike,
+    centers: ArrayLike,
+    *,
+    amplitude: bool | None = None,
+) -> NDArray[np.float64]:
+    """Segment vectors ``(N, d)`` rebuilt from the nearest of ``centers`` ``(k, f)`` to
+    their projections (the model's ``E_f`` and ``s̄``), each scaled by its least-squares
+    amplitude against the segment's own vector when ``amplitude`` (default: the model's
+    ``amplitude`` parameter)."""
+    x = np.ascontiguousarray(np.atleast_2d(vectors), dtype=np.float64)
+    c = np.ascontiguousarray(centers, dtype=np.float64)
+    labels, _ = kernels.kmeans_predict(model.transform(x), c)
+    rebuilt = c[np.asarray(labels)] @ model.components_.T + model.mean_
+    if model.amplitude if amplitude is None else amplitude:
+        rebuilt *= amplitude_gains(x, rebuilt)[:, None]
+    return rebuilt
 
 
 def _are_trials(X: Any) -> TypeGuard[Sequence[Trial] | Trial]:

@@ -41,6 +41,14 @@ in :attr:`SegmentVectors.offsets` and added back the same way. Primitives learne
 vectors are movements that can be placed at any posture; a segment is rebuilt from its
 primitive and its own mean posture (C numbers, 6 per arm for bone directions).
 
+Amplitude
+---------
+A shape can also be scaled: :func:`amplitude_gains` gives the least-squares gain ``a ≥ 0``
+that brings a rebuilt shape closest to a segment's own shape, so that one primitive serves
+the same movement made larger or smaller (the amplitude parameter of a generalised motor
+program, beside its duration and, here, its posture). ``PrimitiveModel(amplitude=True)``
+uses it when it rebuilds segments from their primitives.
+
 The inverse operation, :func:`stretch`, puts an ``(n, 4)`` curve back onto a segment's
 duration and evaluates it at given instants.
 """
@@ -186,6 +194,21 @@ def mean_offsets(vectors: ArrayLike, n_samples: int) -> NDArray[np.float64]:
     if v.ndim != 2 or n < 1 or v.shape[1] % n:
         raise ValueError(f"vectors of shape {v.shape} are not (N, C * {n_samples})")
     return v.reshape(v.shape[0], v.shape[1] // n, n).mean(axis=2)
+
+
+def amplitude_gains(shapes: ArrayLike, rebuilt: ArrayLike) -> NDArray[np.float64]:
+    """Least-squares gains ``a (N,) ≥ 0`` minimising ``‖shapes_i − a_i rebuilt_i‖`` for
+    each row: ``a = max(0, ⟨s, r⟩ / ⟨r, r⟩)``, 1 where ``rebuilt`` is zero. Both are
+    ``(N, d)`` posture-relative vectors (``offsets="mean"``); the gain has no unit."""
+    s = np.atleast_2d(np.asarray(shapes, dtype=np.float64))
+    r = np.atleast_2d(np.asarray(rebuilt, dtype=np.float64))
+    if s.shape != r.shape or s.ndim != 2:
+        raise ValueError(f"shapes {s.shape} and rebuilt {r.shape} must be equal (N, d) arrays")
+    rr = np.einsum("ij,ij->i", r, r)
+    sr = np.einsum("ij,ij->i", s, r)
+    gains = np.ones(s.shape[0])
+    np.divide(sr, rr, out=gains, where=rr > 0.0)
+    return np.maximum(gains, 0.0)
 
 
 def vectors_from_frames(
