@@ -151,3 +151,17 @@ def test_a_failing_video_leaves_no_file(result, tmp_path, monkeypatch) -> None:
     with pytest.raises(RuntimeError, match="encoder failed"):
         write_imitation(result, tmp_path / "out", video="v.gif")
     assert list((tmp_path / "out").iterdir()) == []
+
+
+def test_amplitude_scaled_primitives_rebuild_closer(data) -> None:
+    """With ``amplitude=True`` each primitive is scaled to its segment: the rebuild moves
+    closer to the human than the primitives as they are (same segments and sequence)."""
+    model, trial = data
+    plain = imitate(model, trial, play=False)
+    scaled_model = PrimitiveModel(**{**model.get_params(), "amplitude": True}).fit(
+        imitation_experiment(2, 4, seed=3, preset="strokes")[:-1]
+    )
+    scaled = imitate(scaled_model, trial, play=False)
+    assert scaled.metrics["primitive_sequence"] == plain.metrics["primitive_sequence"]
+    err = [r.metrics["rebuild_vs_human_rms_deg"]["overall"] for r in (scaled, plain)]
+    assert err[0] < err[1]

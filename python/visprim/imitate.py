@@ -389,9 +389,14 @@ def imitate(
     sv = model.vectorize(corpus)
     projections = model.transform(sv.vectors)
     labels, distances = model.assign(projections)
-    coords = model.cluster_centers_[labels] if source == "primitives" else projections
+    if source == "primitives":  # scaled by each segment's amplitude if the model says so
+        from visprim.model import rebuild_from_centers
+
+        rebuilt = rebuild_from_centers(model, sv.vectors, model.cluster_centers_)
+    else:
+        rebuilt = projections @ model.components_.T + model.mean_
     # Curves in the model's description (angles or bone directions), on the trial's turns.
-    curves = sv.to_trial_angles(coords @ model.components_.T + model.mean_)
+    curves = sv.to_trial_angles(rebuilt)
     bounds = np.stack([sv.starts, sv.ends], axis=1)
     rebuild = Rebuild(
         JoinedTrajectory(list(curves), bounds), str(getattr(model, "features", "zyz"))
