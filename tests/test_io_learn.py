@@ -60,6 +60,27 @@ def test_learn_small_folder_then_classify_the_same_frames(
     assert np.bincount(labels, minlength=8).sum() == len(rows)
 
 
+def test_learn_each_arm_learns_one_arm_primitives_from_both(
+    shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--arm each``: every recording gives its right arm and its mirrored left arm as two
+    one-arm trials; the report re-reads them the same way from the recorded source."""
+    files = sorted((shared_data / "bandai_namco_ds2").glob("*.bvh"))[:3]
+    model_path = tmp_path / "m.npz"
+    args = ["learn", *map(str, files), "--out", str(model_path), "--clusters", "8"]
+    assert main([*args, "--arm", "each"]) == 0
+    assert capsys.readouterr().out.startswith("6 trials -> ")
+    m = PrimitiveModel.load(model_path)
+    assert m.arms_ == ("right",)
+    assert m.trial_names_ == [f"{f.stem}_{side}" for f in files for side in ("right", "left")]
+    assert main(["report", str(model_path), "--out", str(tmp_path / "rep")]) == 0
+    # Streaming reads file by file and does not split arms: refused, not half-done.
+    stream = ["learn", str(files[0]), "--out", str(tmp_path / "s.npz"), "--arm", "each"]
+    assert main([*stream, "--stream"]) == 2
+    assert "--arm each does not apply" in capsys.readouterr().err
+    assert not (tmp_path / "s.npz").exists()
+
+
 def test_learn_with_fewer_segments_than_clusters_is_a_clear_error(
     shared_data: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -146,7 +146,8 @@ def read_files(
     on_error: str = "raise",
 ) -> list[Trial]:
     """The trials of ``paths`` (files, folders, globs) read with ``options`` (reader keyword
-    arguments, see :func:`reader_options`); ``on_error="warn"`` skips unreadable files."""
+    arguments, see :func:`reader_options`; ``arm=EACH_ARM`` gives each file's arms as
+    one-arm trials); ``on_error="warn"`` skips unreadable files."""
     from visprim.io import FORMATS, read_many
 
     for item in paths:
@@ -160,9 +161,17 @@ def read_files(
             raise CLIError(
                 f"{item} is not a recording (the readers take {', '.join(sorted(FORMATS))}); " + fix
             )
+    options = dict(options or {})
+    each = options.get("arm") == EACH_ARM
+    if each:
+        options["arm"] = "both"
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        trials = read_many(list(paths), resample=resample, on_error=on_error, **(options or {}))
+        trials = read_many(list(paths), resample=resample, on_error=on_error, **options)
+    if each:
+        from visprim.trial import split_arms
+
+        trials = split_arms(trials)
     skipped = [w for w in caught if str(w.message).startswith("skipped")]
     for w in caught:
         log.warning("%s", w.message)
@@ -192,7 +201,7 @@ def trials_and_source(
     if data and getattr(args, "generated", False):
         raise UsageError("give DATA files or --generated, not both")
     if data:
-        options = reader_options(args)
+        options = reader_options(args, allow_each=True)
         on_error = "raise" if getattr(args, "strict", False) else "warn"
         trials = read_files(data, resample, options, on_error=on_error)
         short = str(getattr(args, "short", "reduce"))
@@ -245,7 +254,13 @@ def add_reader_options(p: argparse.ArgumentParser, *, many: bool = True) -> None
     g.add_argument(
         "--arm",
         default="right",
-        help="arm to read: right (default), left or both",
+        help="arm to read: right (default), left or both"
+        + (
+            "; each: both arms, as one-arm recordings (the left mirrored), to learn one-arm "
+            "primitives from both"
+            if many
+            else ""
+        ),
     )
     g.add_argument(
         "--skeleton", metavar="ASF", default=None, help="AMC files: the .asf skeleton to use"
@@ -329,15 +344,23 @@ def _mapping(text: str) -> dict[str, Any]:
     return value
 
 
-def reader_options(args: argparse.Namespace) -> dict[str, Any]:
+#: ``--arm each``: both arms read, then each as a one-arm trial (the left one mirrored, see
+#: :func:`visprim.trial.split_arms`), for commands that read many recordings.
+EACH_ARM = "each"
+
+
+def reader_options(args: argparse.Namespace, *, allow_each: bool = False) -> dict[str, Any]:
     """Keyword arguments for :func:`visprim.io.read_many` from the reader options (only those
-    given; ``arm`` always). Raises :class:`UsageError` for a bad ``--arm``."""
+    given; ``arm`` always, which may be :data:`EACH_ARM` when ``allow_each``, for
+    :func:`read_files`). Raises :class:`UsageError` for a bad ``--arm``."""
     from visprim.io.presets import check_arm
 
+    given = str(getattr(args, "arm", "right"))
     try:
-        arm = check_arm(getattr(args, "arm", "right"))
+        arm = EACH_ARM if allow_each and given.lower() == EACH_ARM else check_arm(given)
     except ValueError as exc:
-        raise UsageError(f"--arm: {exc}") from None
+        each = ", or 'each' to learn one-arm primitives from both" if allow_each else ""
+        raise UsageError(f"--arm: {exc}{each}") from None
     opts: dict[str, Any] = {"arm": arm}
     for name in ("skeleton", "rate", "preset", "mapping", "up_axis"):
         value = getattr(args, name, None)

@@ -64,6 +64,8 @@ def _run_corpus(args: argparse.Namespace) -> int:
     data = list(args.data or [])
     if data and args.generated:
         raise common.UsageError("give DATA files or --generated, not both")
+    if str(getattr(args, "arm", "")).lower() == common.EACH_ARM:
+        raise common.UsageError("--arm each does not apply to --stream or --dask")
     try:
         corpus = (
             Corpus(data, resample=args.resample, **common.reader_options(args))
