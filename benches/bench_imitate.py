@@ -15,7 +15,8 @@ Recordings imitated (three kinds): an HDM05 .amc of the held-out subject, a Band
 .bvh (with both models) and a C3D marker recording. For each, the primitive rebuild and, as
 the upper bound beside it, the near-copy from each segment's own projection (``--source
 projection``), both played on Adonis with the stable PD at 1 ms; and as the simple
-baseline, the human's mean posture held still (joint-space RMS against the human).
+baseline, the human's mean posture held still. Errors against the human are given in joint
+space and as the RMS angle between bone directions (what is seen of the arm).
 
 Speed (median of repeated runs, [min, max] beside it): ``play`` of each rebuild without
 rendering as a real-time factor (movement seconds / wall seconds; dt = 1 ms, and 2 ms for
@@ -80,15 +81,17 @@ def bare_factor(adonis: tuple, start: np.ndarray, n_steps: int, dt: float) -> fl
     return n_steps * dt / (time.perf_counter() - t0)
 
 
-def still_rms(res: object) -> float:
-    """The simple baseline: joint-space RMS (deg) against the human of the human's mean
-    posture (mean of each angle over the covered frames) held still."""
+def still_rms(res: object) -> tuple[float, float]:
+    """The simple baseline: joint-space and bone-direction RMS (deg) against the human of
+    the human's mean posture (mean of each angle over the covered frames) held still."""
+    from visprim.features import direction_rms_deg
     from visprim.imitate import joint_space_errors
 
     human = res.human[res.covered]  # type: ignore[attr-defined]
     still = np.broadcast_to(human.mean(axis=0), human.shape)
     shoulder, elbow = joint_space_errors(still, human)
-    return float(np.degrees(np.sqrt(np.mean(np.square(np.concatenate([shoulder, elbow]))))))
+    joint = float(np.degrees(np.sqrt(np.mean(np.square(np.concatenate([shoulder, elbow]))))))
+    return joint, direction_rms_deg(still, human)
 
 
 def training_files(data: Path, which: str) -> list[str]:
@@ -105,7 +108,7 @@ def learn(data: Path, out: Path, which: str) -> object:
     from visprim import PrimitiveModel
     from visprim.cli.main import main as cli
 
-    argv = ["learn", *training_files(data, which), "--out", str(out), "--clusters", "30"]
+    argv = ["learn", *training_files(data, which), "--out", str(out), "--clusters", "30", "--force"]
     print("visprim " + " ".join(argv), flush=True)
     if cli(argv) != 0:
         sys.exit("bench_imitate: visprim learn failed")
@@ -160,6 +163,7 @@ def main() -> None:
                     m["coverage"],
                     " ".join(map(str, m["primitive_sequence"])),
                     still_rms(res),
+                    (m["rebuild_vs_human_direction_rms_deg"], a["vs_human_direction_rms_deg"]),
                 )
             )
             if source == "primitives" and which == "hdm05":
@@ -169,18 +173,20 @@ def main() -> None:
           "| rebuild vs human, deg RMS (γ β α elbow; all) "
           "| joint space: rebuild vs human | Adonis vs human | difference | Adonis vs rebuild "
           "| completion: Adonis / human (ratio) | uncovered "
-          "| baseline: mean posture held |")  # fmt: skip
-    print("|---|---|---|---:|---|---:|---:|---:|---:|---:|---|---:|")
-    for name, which, src, n, per, rb, ad, avr, (done, span, ratio), cov, _, still in rows:
+          "| baseline: mean posture held "
+          "| bone directions: rebuild vs human | Adonis vs human | baseline |")  # fmt: skip
+    print("|---|---|---|---:|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|")
+    for row in rows:
+        name, which, src, n, per, rb, ad, avr, (done, span, ratio), cov, _, still, bones = row
         angles = " ".join(f"{per[k]:.1f}" for k in ("gamma", "beta", "alpha", "elbow"))
         print(
             f"| {name} | {which} | {src} | {n} | {angles}; {per['overall']:.1f} | {rb:.2f} | "
             f"{ad:.2f} | {ad - rb:+.2f} | {avr:.2f} | {done:.2f} s / {span:.2f} s "
             f"({ratio:.2f}x) | {cov['uncovered_s']:.2f} s ({cov['uncovered_percent']:.1f} %) | "
-            f"{still:.2f} |"
+            f"{still[0]:.2f} | {bones[0]:.2f} | {bones[1]:.2f} | {still[1]:.2f} |"
         )
     print("\nPrimitive sequences:")
-    for name, which, src, *_, seq, _ in rows:
+    for name, which, src, *_, seq, _, _ in rows:
         if src == "primitives":
             print(f"  {name} ({which} model): {seq}")
 

@@ -165,3 +165,23 @@ def test_amplitude_scaled_primitives_rebuild_closer(data) -> None:
     assert scaled.metrics["primitive_sequence"] == plain.metrics["primitive_sequence"]
     err = [r.metrics["rebuild_vs_human_rms_deg"]["overall"] for r in (scaled, plain)]
     assert err[0] < err[1]
+
+
+def test_bone_direction_errors_are_reported(result) -> None:
+    """The bone-direction RMS is the angle between the arm's bones, recomputed here from
+    forward kinematics of the angles (independent of visprim.features)."""
+    from visprim.arm import forward_kinematics
+
+    m = result.metrics
+    cov = result.covered
+
+    def bones(angles: np.ndarray) -> np.ndarray:
+        pts = forward_kinematics(angles)  # shoulder, elbow, wrist, hand
+        b = np.stack([pts[:, 1] - pts[:, 0], pts[:, 2] - pts[:, 1]], axis=1)
+        return b / np.linalg.norm(b, axis=2, keepdims=True)
+
+    cos = np.clip(np.sum(bones(result.rebuild_angles[cov]) * bones(result.human[cov]), 2), -1, 1)
+    want = np.degrees(np.sqrt(np.mean(np.arccos(cos) ** 2)))
+    assert m["rebuild_vs_human_direction_rms_deg"] == pytest.approx(want, rel=1e-9)
+    assert 0.0 < m["adonis"]["vs_human_direction_rms_deg"] < 90.0
+    assert "bone-direction RMS" in result.summary()

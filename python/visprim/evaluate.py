@@ -59,7 +59,7 @@ from numpy.typing import NDArray
 from visprim import kernels
 from visprim.accuracy import angular_error_deg
 from visprim.classify import MotionClassifier, arm_directions, dtw_matrix
-from visprim.features import from_angles
+from visprim.features import direction_rms_deg
 from visprim.segment.coverage import DEFAULT_MOVING_SPEED, segment_coverage
 from visprim.trial import Trial, split_arms
 
@@ -328,15 +328,6 @@ def _total_error_sq(
     return float(np.einsum("ij,ij->", diff, diff))
 
 
-def _direction_rms_deg(angles: NDArray[np.float64], reference: NDArray[np.float64]) -> float:
-    """RMS angle (degrees) between the bone directions of two (T, 4 n_arms) angle arrays:
-    free of the Euler angles' singularity, where γ and α may differ while the arm does not."""
-    a = from_angles(angles, "directions").reshape(angles.shape[0], -1, 3)
-    b = from_angles(reference, "directions").reshape(reference.shape[0], -1, 3)
-    cos = np.clip(np.sum(a * b, axis=2), -1.0, 1.0)
-    return float(np.degrees(np.sqrt(np.mean(np.arccos(cos) ** 2))))
-
-
 def evaluate_benchmark(
     bench: Benchmark,
     *,
@@ -447,7 +438,7 @@ def evaluate_benchmark(
                 _, rec, orig = model.reconstruct_movement(t, source="cluster", return_original=True)
             except ValueError:
                 continue
-            rms.append(_direction_rms_deg(rec, orig))
+            rms.append(direction_rms_deg(rec, orig))
         seconds["reconstruction"] += time.perf_counter() - t0
 
     per_group = {}

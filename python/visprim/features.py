@@ -41,6 +41,7 @@ __all__ = [
     "FEATURES",
     "channel_names",
     "check_features",
+    "direction_rms_deg",
     "from_angles",
     "n_channels",
     "periodic_channels",
@@ -118,3 +119,17 @@ def to_angles(
         for a in range(v.shape[1] // 6)
     ]
     return np.ascontiguousarray(np.concatenate(out, axis=1))
+
+
+def direction_rms_deg(angles: ArrayLike, reference: ArrayLike) -> float:
+    """RMS angle in **degrees** between the bone directions (upper arm, forearm) of two
+    ``(T, 4 n_arms)`` angle arrays, over every frame and bone: free of the Z-Y-Z
+    singularity, where γ and α may differ while the arm does not."""
+    a = np.asarray(angles, dtype=np.float64)
+    b = np.asarray(reference, dtype=np.float64)
+    if a.shape != b.shape or a.ndim != 2 or a.shape[1] % 4:
+        raise ValueError(f"angle arrays {a.shape} and {b.shape} must be equal (T, 4 n_arms)")
+    u = from_angles(a, "directions").reshape(a.shape[0], -1, 3)
+    v = from_angles(b, "directions").reshape(b.shape[0], -1, 3)
+    cos = np.clip(np.sum(u * v, axis=2), -1.0, 1.0)
+    return float(np.degrees(np.sqrt(np.mean(np.arccos(cos) ** 2))))

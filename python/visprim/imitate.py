@@ -30,7 +30,10 @@ segment covers:
   geodesic angle (the rotation between two shoulder orientations, free of the Z-Y-Z
   singularity) and the elbow's difference, RMS of each and over both. Adonis is compared at
   the same clock: recording time ``t`` against the simulation ``t − start`` seconds after the
-  first segment started, so a robot that falls behind is charged for it.
+  first segment started, so a robot that falls behind is charged for it;
+* for rebuild vs human and Adonis vs human, the RMS angle between the bone directions
+  (upper arm and forearm, :func:`visprim.features.direction_rms_deg`): what is seen of the
+  arm, blind to humeral rotation with the elbow straight, where it changes nothing visible.
 
 Coverage: the parts of the recording before the first segment, after the last and between
 segments are listed (seconds and percent of the recording); nothing is dropped silently.
@@ -48,6 +51,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from visprim.arm import ANGLE_NAMES, shoulder_rotation_body
+from visprim.features import direction_rms_deg
 from visprim.sim.joining import JoinedTrajectory
 from visprim.trial import Trial
 
@@ -153,6 +157,11 @@ class Imitation:
                 f"  joint-space RMS (deg, shoulder geodesic + elbow): rebuild vs human "
                 f"{j['overall']:.2f}; Adonis vs human {vs_human:.2f}; "
                 f"Adonis vs rebuild {vs_rebuild:.2f}"
+            )
+            lines.append(
+                f"  bone-direction RMS (deg, upper arm and forearm): rebuild vs human "
+                f"{m['rebuild_vs_human_direction_rms_deg']:.2f}; Adonis vs human "
+                f"{a['vs_human_direction_rms_deg']:.2f}"
             )
             lines.append(
                 f"  Adonis ({a['servo']} servo): completed in {a['completion_time_s']:.2f} s; "
@@ -456,6 +465,7 @@ def imitate(
         },
         "rebuild_vs_human_rms_deg": _angle_rms(rb_a[cov] - human[cov]),
         "rebuild_vs_human_joint_rms_deg": _joint_rms(*joint_space_errors(rb_a[cov], human[cov])),
+        "rebuild_vs_human_direction_rms_deg": direction_rms_deg(rb_a[cov], human[cov]),
     }
 
     playback = None
@@ -532,6 +542,7 @@ def _adonis_metrics(
         "vs_human_joint_rms_deg": _joint_rms(*joint_space_errors(adonis[sel], human[sel])),
         "vs_rebuild_joint_rms_deg": _joint_rms(*joint_space_errors(adonis[sel], rebuild[sel])),
         "vs_human_rms_deg": _angle_rms(adonis[sel] - human[sel]),
+        "vs_human_direction_rms_deg": direction_rms_deg(adonis[sel], human[sel]),
         "vs_setpoint_rms_deg": float(playback.rms_error_deg),
         "completion_time_s": float(playback.completion_time),
         "time_ratio": float(playback.completion_time / playback.movement_duration),
