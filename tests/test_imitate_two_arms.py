@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from visprim import PrimitiveModel
 from visprim.datasets import imitation_experiment
+from visprim.features import from_angles
 from visprim.imitate import human_arm_points, imitate
 from visprim.trial import Trial
 
@@ -66,3 +67,58 @@ def test_files_and_video_frame_for_two_arms(result, tmp_path) -> None:
     header = paths["csv"].read_text().splitlines()[0].split(",")
     assert "human_left_elbow_rad" in header and "adonis_right_gamma_rad" in header
     assert paths["video"].stat().st_size > 0
+
+
+@pytest.fixture(scope="module")
+def one_arm_both():
+    """A one-arm model learned from both arms of movements whose arms differ (the left arm of
+    one trial is the right arm of another, mirrored), imitating a two-arm movement."""
+    from visprim.trial import split_arms
+
+    ones = imitation_experiment(2, 4, seed=6)
+    both = [
+        Trial(
+            a.times[: min(a.n_frames, b.n_frames)],
+            np.concatenate(
+                [a.markers[: min(a.n_frames, b.n_frames)], b.markers[: a.n_frames] * FLIP], axis=1
+            )[: min(a.n_frames, b.n_frames)],
+            name=f"{a.name}+{b.name}",
+            arms=("right", "left"),
+        )
+        for a, b in zip(ones, ones[1:] + ones[:1], strict=True)
+    ]
+    model = PrimitiveModel(n_clusters=5, n_init=2).fit(split_arms(both[:-1]))
+    assert model.arms_ == ("right",)
+    return model, both[-1]
+
+
+def test_a_one_arm_model_imitates_each_arm_on_its_own(one_arm_both) -> None:
+    """Played together, each arm is what imitating that arm alone gives: the right arm, and
+    the left arm mirrored into a right arm (the left's angles are in the mirror convention)."""
+    from visprim.trial import split_arms
+
+    model, trial = one_arm_both
+    res = imitate(model, trial)
+    assert res.human.shape[1] == res.rebuild_angles.shape[1] == 8
+    assert res.segment_arm is not None and set(res.segment_arm.tolist()) == {0, 1}
+    assert res.metrics["arms_imitated"] == "one by one"
+    assert {s["arm"] for s in res.metrics["segments"]} == {"right", "left"}
+    assert "right arm" in res.summary() and "left arm" in res.summary()
+    for side, arm in enumerate(split_arms(trial)):
+        alone = imitate(model, arm, play=False)
+        cols = slice(4 * side, 4 * side + 4)
+        np.testing.assert_allclose(res.human[:, cols], alone.human, atol=1e-12)
+        np.testing.assert_array_equal(res.primitives[res.segment_arm == side], alone.primitives)
+        # The same bones, up to 0.3°: inverse kinematics interpolates γ and α across the
+        # singular cone along the evaluation grid, which differs (one grid for both arms).
+        own = np.isfinite(alone.rebuild_angles[:, 0])
+        np.testing.assert_allclose(
+            from_angles(res.rebuild_angles[own, cols], "directions"),
+            from_angles(alone.rebuild_angles[own], "directions"),
+            atol=5e-3,
+        )
+    # Adonis follows both arms.
+    a = res.metrics["adonis"]
+    assert a["vs_rebuild_joint_rms_deg"]["overall"] < 2.0
+    played = np.isfinite(res.adonis_angles[:, 0])
+    assert played.sum() > 0.9 * np.isfinite(res.rebuild_angles[:, 0]).sum()

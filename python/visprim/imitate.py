@@ -18,7 +18,9 @@
    segment from its own f-D projection instead: a near-copy of the human, not an imitation
    through primitives, reported as such;
 5. the rebuild is played on Adonis (:func:`visprim.sim.play`, stable PD or the paper's servo;
-   both arms for a two-arm model, whose recordings are read with ``arm="both"``).
+   both arms for a two-arm model, whose recordings are read with ``arm="both"``). A one-arm
+   model given a two-arm recording imitates each arm on its own (steps 2–4 per arm, the left
+   arm mirrored into a right arm, :class:`ArmsRebuild`) and Adonis plays both.
 
 What the human did is the low-passed IK angles of the recording (what the method sees).
 Errors (:class:`Imitation.metrics`, degrees) are taken at the recording's frames that a
@@ -42,6 +44,7 @@ Gaps between segments are bridged smoothly in the rebuild and played.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -53,7 +56,7 @@ from scipy.spatial.transform import Rotation
 from visprim.arm import ANGLE_NAMES, shoulder_rotation_body
 from visprim.features import direction_rms_deg
 from visprim.sim.joining import JoinedTrajectory
-from visprim.trial import Trial
+from visprim.trial import Trial, split_arms
 
 Source = Literal["primitives", "projection"]
 Servo = Literal["stable", "paper"]
@@ -66,12 +69,21 @@ SOURCE_LABELS: dict[str, str] = {
         "(an upper bound on what the primitives could do)"
     ),
 }
+#: Arm of each part of a recording imitated arm by arm (:attr:`Imitation.segment_arm`).
+ARM_SIDES: tuple[str, str] = ("right", "left")
 #: Default frame period (s) for a model that does not record one (the study's 34 ms).
 DEFAULT_PERIOD_S = 0.034
 #: Spacing (s) of the rebuild samples handed to the simulation.
 PLAY_SAMPLE_S = 0.005
 
-__all__ = ["Imitation", "Rebuild", "human_arm_points", "imitate", "model_frame_period"]
+__all__ = [
+    "ArmsRebuild",
+    "Imitation",
+    "Rebuild",
+    "human_arm_points",
+    "imitate",
+    "model_frame_period",
+]
 
 
 def model_frame_period(model: Any) -> float | None:
@@ -91,12 +103,15 @@ class Imitation:
     source : "primitives" or "projection" — what the rebuild is made of.
     trial : Trial — the recording as imitated (resampled to the model's period).
     times : (F,) s — its frame times.
-    human : (F, 4) rad — low-passed IK angles (γ, β, α, elbow).
+    human : (F, 4 n_arms) rad — low-passed IK angles (γ, β, α, elbow per arm; a left arm
+        in the mirror convention).
     segments : (N, 2) s — ``[start, end]`` of each segment.
     primitives : (N,) int — nearest primitive of each segment.
     distances : (N,) rad — distance of each segment's projection to that primitive's centre.
-    segment_of_frame : (F,) int — segment index of each frame, -1 where none covers it.
-    rebuild : Rebuild — the joined rebuild (call it with times for angles, velocities).
+    segment_of_frame : (F,) int — segment index of each frame, -1 where none covers it (for
+        arms imitated one by one, the right arm's segment where it has one).
+    rebuild : Rebuild or ArmsRebuild — the joined rebuild (call it with times for angles,
+        velocities).
     rebuild_angles, rebuild_velocities : (F, 4) — the rebuild at the frames inside
         ``[segments[0, 0], segments[-1, 1]]`` (NaN outside).
     adonis_angles : (F, 4) or None — Adonis's arm angles at the same clock (NaN outside the
@@ -114,12 +129,15 @@ class Imitation:
     primitives: NDArray[np.int64]
     distances: NDArray[np.float64]
     segment_of_frame: NDArray[np.int64]
-    rebuild: Rebuild
+    rebuild: Rebuild | ArmsRebuild
     rebuild_angles: NDArray[np.float64]
     rebuild_velocities: NDArray[np.float64]
     adonis_angles: NDArray[np.float64] | None
     playback: Any
     metrics: dict[str, Any] = field(default_factory=dict)
+    #: (N,) arm of each segment (0 right, 1 left) when a one-arm model imitates both arms
+    #: one by one; None otherwise.
+    segment_arm: NDArray[np.int64] | None = None
 
     @property
     def covered(self) -> NDArray[np.bool_]:
@@ -130,10 +148,18 @@ class Imitation:
         """A few lines for the terminal."""
         m = self.metrics
         rb = m["rebuild_vs_human_rms_deg"]
+        if self.segment_arm is None:
+            sequence = " ".join(str(int(k)) for k in self.primitives)
+        else:  # arms imitated one by one
+            sequence = "; ".join(
+                f"{side} arm "
+                + " ".join(str(int(k)) for k in self.primitives[self.segment_arm == i])
+                for i, side in enumerate(ARM_SIDES)
+            )
         lines = [
             f"{self.name} ({len(self.times)} frames every {1e3 * m['frame_period_s']:.1f} ms, "
             f"{m['segmentation'].upper()}): {len(self.primitives)} segments -> primitives "
-            f"{' '.join(str(int(k)) for k in self.primitives)}",
+            f"{sequence}",
             f"  rebuild: {SOURCE_LABELS[self.source]}",
             "  rebuild vs human RMS (deg): "
             + ", ".join(f"{a} {rb[a]:.2f}" for a in channel_names(self.human.shape[1]))
@@ -322,6 +348,97 @@ class Rebuild:
         return angles, velocities
 
 
+class ArmsRebuild:
+    """Rebuilds of the arms of one recording imitated one by one (a one-arm model on a
+    two-arm recording), side by side: ``(angles (k, 4 n_arms), velocities)``. Outside its
+    own segments an arm holds its first or last rebuilt posture (velocity zero). ``turns``
+    as in :class:`Rebuild`."""
+
+    def __init__(self, arms: Sequence[Rebuild]) -> None:
+        self.arms = list(arms)
+        self.turns: NDArray[np.float64] | None = None
+
+    @property
+    def start(self) -> float:
+        return min(r.start for r in self.arms)
+
+    @property
+    def end(self) -> float:
+        return max(r.end for r in self.arms)
+
+    def __call__(self, times: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        t = np.atleast_1d(np.asarray(times, dtype=np.float64))
+        angles, velocities = [], []
+        for r in self.arms:
+            # One evaluation along the arm's own span and its two ends, so that the held
+            # postures continue the path (inverse kinematics unwraps γ and α along it).
+            own = (t >= r.start) & (t <= r.end)
+            path = np.union1d([r.start, r.end], t[own])
+            path_a, path_v = r(path)
+            a = np.where((t < r.start)[:, None], path_a[0], path_a[-1])
+            v = np.zeros_like(a)
+            rows = np.searchsorted(path, t[own])
+            a[own], v[own] = path_a[rows], path_v[rows]
+            angles.append(a)
+            velocities.append(v)
+        out = np.concatenate(angles, axis=1)
+        if self.turns is not None:
+            out = out + self.turns
+        return out, np.concatenate(velocities, axis=1)
+
+
+@dataclass(eq=False)
+class _Segmented:
+    """One imitated trial (or arm): its frames, the human's angles, its segments, their
+    primitives and the joined rebuild."""
+
+    times: NDArray[np.float64]
+    human: NDArray[np.float64]
+    bounds: NDArray[np.float64]
+    labels: NDArray[np.int64]
+    distances: NDArray[np.float64]
+    rebuild: Rebuild
+    method: str
+
+
+def _segment_and_rebuild(model: Any, trial: Trial, source: Source, name: str) -> _Segmented:
+    corpus = model.prepare([trial])
+    seg = corpus.segmentation
+    if seg.n_segments == 0:
+        raise ValueError(
+            f"{trial.source or name}: no segment found (the arm never moves significantly for "
+            f"{seg.method.upper()}); nothing to imitate"
+        )
+    sv = model.vectorize(corpus)
+    projections = model.transform(sv.vectors)
+    labels, distances = model.assign(projections)
+    if source == "primitives":  # scaled by each segment's amplitude if the model says so
+        from visprim.model import rebuild_from_centers
+
+        rebuilt = rebuild_from_centers(model, sv.vectors, model.cluster_centers_)
+    else:
+        rebuilt = projections @ model.components_.T + model.mean_
+    # Curves in the model's description (angles or bone directions), on the trial's turns.
+    curves = sv.to_trial_angles(rebuilt)
+    bounds = np.stack([sv.starts, sv.ends], axis=1)
+    rebuild = Rebuild(
+        JoinedTrajectory(list(curves), bounds), str(getattr(model, "features", "zyz"))
+    )
+    return _Segmented(
+        corpus.times_all, corpus.angles_all, bounds, labels, distances, rebuild, str(seg.method)
+    )
+
+
+def _segment_of_frame(times: NDArray[np.float64], bounds: NDArray[np.float64]) -> NDArray[np.int64]:
+    """Segment index of each frame (segment j covers [start_j, end_j), the last one also its
+    end), -1 where none covers it."""
+    seg_of = np.full(times.shape[0], -1, dtype=np.int64)
+    for j, (s, e) in enumerate(bounds):
+        last = j == bounds.shape[0] - 1
+        seg_of[(times >= s - 1e-9) & ((times <= e + 1e-9) if last else (times < e - 1e-9))] = j
+    return seg_of
+
+
 def _turns(angles: NDArray[np.float64], reference: NDArray[np.float64]) -> NDArray[np.float64]:
     """Whole turns (per column, rad) that bring γ and α of ``angles`` closest to
     ``reference`` on average (zero for β and the elbow)."""
@@ -360,7 +477,10 @@ def imitate(
     Parameters
     ----------
     model : PrimitiveModel — fitted (or loaded).
-    recording : Trial or path — any file :func:`visprim.io.read` reads.
+    recording : Trial or path — any file :func:`visprim.io.read` reads (the arms of the
+        model). A two-arm trial given to a one-arm model has each arm imitated on its own
+        through the same primitives, the left arm mirrored (:func:`visprim.trial.split_arms`),
+        and Adonis plays both.
     source : "primitives" (default) or "projection" (near-copy, labelled as such).
     servo : "stable" (stable PD, default) or "paper" (eq. (1) with via-point switching).
     period : seconds, None or "model" — resample to this frame period (None: keep the file's
@@ -388,31 +508,23 @@ def imitate(
         trial = resample_trial(trial, float(target))
     name = trial.name or Path(str(trial.source or "recording")).stem
 
-    corpus = model.prepare([trial])
-    seg = corpus.segmentation
-    if seg.n_segments == 0:
-        raise ValueError(
-            f"{trial.source or name}: no segment found (the arm never moves significantly for "
-            f"{seg.method.upper()}); nothing to imitate"
-        )
-    sv = model.vectorize(corpus)
-    projections = model.transform(sv.vectors)
-    labels, distances = model.assign(projections)
-    if source == "primitives":  # scaled by each segment's amplitude if the model says so
-        from visprim.model import rebuild_from_centers
-
-        rebuilt = rebuild_from_centers(model, sv.vectors, model.cluster_centers_)
-    else:
-        rebuilt = projections @ model.components_.T + model.mean_
-    # Curves in the model's description (angles or bone directions), on the trial's turns.
-    curves = sv.to_trial_angles(rebuilt)
-    bounds = np.stack([sv.starts, sv.ends], axis=1)
-    rebuild = Rebuild(
-        JoinedTrajectory(list(curves), bounds), str(getattr(model, "features", "zyz"))
+    # A one-arm model imitates each arm of a two-arm recording on its own (the left arm
+    # mirrored into a right arm, :func:`visprim.trial.split_arms`).
+    per_arm = trial.n_arms > len(arms)
+    parts = [
+        _segment_and_rebuild(model, t, source, name)
+        for t in (split_arms(trial) if per_arm else [trial])
+    ]
+    times = parts[0].times
+    human = np.concatenate([p.human for p in parts], axis=1)
+    rebuild: Rebuild | ArmsRebuild = (
+        ArmsRebuild([p.rebuild for p in parts]) if per_arm else parts[0].rebuild
     )
+    bounds = np.concatenate([p.bounds for p in parts])
+    labels = np.concatenate([p.labels for p in parts])
+    distances = np.concatenate([p.distances for p in parts])
+    segment_arm = np.concatenate([np.full(len(p.labels), i) for i, p in enumerate(parts)])
 
-    times = corpus.times_all
-    human = corpus.angles_all
     inside = (times >= rebuild.start - 1e-9) & (times <= rebuild.end + 1e-9)
     # One evaluation on the frames and a fine grid together (inverse kinematics unwraps γ and
     # α along it), put on the human's whole turns.
@@ -432,14 +544,18 @@ def imitate(
     rb_a = np.full_like(human, np.nan)
     rb_v = np.full_like(human, np.nan)
     rb_a[inside], rb_v[inside] = grid_a[rows], grid_v[rows]
+    # Each frame's segment: the first arm's that covers it (segment indices run arm by arm).
     seg_of = np.full(times.shape[0], -1, dtype=np.int64)
-    for j, (s, e) in enumerate(bounds):
-        last = j == bounds.shape[0] - 1
-        seg_of[(times >= s - 1e-9) & ((times <= e + 1e-9) if last else (times < e - 1e-9))] = j
+    first = 0
+    for p in parts:
+        own = _segment_of_frame(times, p.bounds)
+        seg_of = np.where((seg_of < 0) & (own >= 0), own + first, seg_of)
+        first += len(p.labels)
     cov = seg_of >= 0
+    seg_method = parts[0].method
 
     t0, t1 = float(times[0]), float(times[-1])
-    gaps = _uncovered(t0, t1, bounds)
+    gaps = _uncovered(t0, t1, bounds[np.argsort(bounds[:, 0], kind="stable")])
     uncovered_s = float(sum(e - s for s, e in gaps))
     duration = t1 - t0
     metrics: dict[str, Any] = {
@@ -448,12 +564,14 @@ def imitate(
         "source": source,
         "source_label": SOURCE_LABELS[source],
         "frame_period_s": float(trial.frame_period),
-        "segmentation": str(seg.method),
+        "segmentation": seg_method,
         "n_segments": int(bounds.shape[0]),
         "primitive_sequence": [int(k) for k in labels],
+        "arms_imitated": "one by one" if per_arm else "together",
         "segments": [
             {"start_s": float(s), "end_s": float(e), "primitive": int(k), "distance_rad": float(d)}
-            for (s, e), k, d in zip(bounds, labels, distances, strict=True)
+            | ({"arm": ARM_SIDES[int(a)]} if per_arm else {})
+            for (s, e), k, d, a in zip(bounds, labels, distances, segment_arm, strict=True)
         ],
         "human_duration_s": duration,
         "covered_span_s": rebuild.end - rebuild.start,
@@ -492,6 +610,7 @@ def imitate(
         adonis_angles=adonis,
         playback=playback,
         metrics=metrics,
+        segment_arm=segment_arm if per_arm else None,
     )
 
 

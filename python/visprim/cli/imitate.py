@@ -11,7 +11,8 @@ from visprim.cli import common, outputs
 
 def read_recording(args: argparse.Namespace, path: str, model: Any) -> Any:
     """Read the recording ``path`` with the reader options of ``args``: both arms for a
-    two-arm model (whatever ``--arm`` says), else the arm asked for."""
+    two-arm model (whatever ``--arm`` says), else the arm asked for (``--arm both`` with a
+    one-arm model: each arm imitated on its own through its primitives)."""
     from visprim.io import read
 
     opts = common.reader_options(args)
