@@ -9,7 +9,9 @@ printed), on recordings other than those imitated:
   ``visprim imitate``.
 * ``bandai`` (leave one action out): the files of ``bandai_namco_ds2`` of the other actions
   (raise both hands, wave one or both hands), for the Bandai clip of raising the right hand
-  (written beside ``--model`` with the suffix ``_bandai``).
+  (written beside ``--model`` with the suffix ``_bandai``); and ``bandai-each``, the same
+  files learned with ``--arm each`` (one-arm primitives from both arms), which imitates both
+  arms of the clip, each through the same primitives (suffix ``_bandai_each``).
 
 Recordings imitated (three kinds): an HDM05 .amc of the held-out subject, a Bandai-Namco
 .bvh (with both models) and a C3D marker recording. For each, the primitive rebuild and, as
@@ -49,14 +51,17 @@ TRAIN_SUBJECTS = ("bd", "bk", "dg")
 #: The Bandai clip imitated, and the action whose files the within-dataset model leaves out.
 BANDAI = "bandai_namco_ds2/dataset-2_raise-up-right-hand_elderly_001.bvh"
 BANDAI_ACTION = "raise-up-right-hand"
-#: (recording, model) pairs: "hdm05" (three HDM05 actors) or "bandai" (the Bandai folder's
-#: other actions).
+#: (recording, model) pairs: "hdm05" (three HDM05 actors), "bandai" (the Bandai folder's
+#: other actions) or "bandai-each" (the same files, one-arm primitives learned from both arms
+#: with ``--arm each``; it imitates both arms of the recording).
 RECORDINGS = (
     ("hdm05_cut_amc/HDM_mm_throwBasketball_010_120.amc", "hdm05"),
     (BANDAI, "hdm05"),
     (BANDAI, "bandai"),
+    (BANDAI, "bandai-each"),
     ("kineticstoolkit_c3d/kinematics_tennis_serve.c3d", "hdm05"),
 )
+MODELS = ("hdm05", "bandai", "bandai-each")
 
 
 def spread(values: list[float], fmt: str = "{:.2f}") -> str:
@@ -108,7 +113,8 @@ def learn(data: Path, out: Path, which: str) -> object:
     from visprim import PrimitiveModel
     from visprim.cli.main import main as cli
 
-    argv = ["learn", *training_files(data, which), "--out", str(out), "--clusters", "30", "--force"]
+    argv = ["learn", *training_files(data, which), "--out", str(out), "--clusters", "30"]
+    argv += ["--force", *(["--arm", "each"] if which == "bandai-each" else [])]
     print("visprim " + " ".join(argv), flush=True)
     if cli(argv) != 0:
         sys.exit("bench_imitate: visprim learn failed")
@@ -133,8 +139,9 @@ def main() -> None:
     from visprim.sim.sidebyside import SideBySide
 
     models = {}
-    for which in ("hdm05", "bandai"):
-        path = args.model if which == "hdm05" else args.model.with_stem(args.model.stem + "_bandai")
+    for which in MODELS:
+        suffix = "" if which == "hdm05" else "_" + which.replace("-", "_")
+        path = args.model.with_stem(args.model.stem + suffix)
         models[which] = (
             PrimitiveModel.load(path)
             if args.reuse and path.is_file()
@@ -144,7 +151,7 @@ def main() -> None:
 
     rows, speed, results = [], [], []
     for rel, which in RECORDINGS:
-        trial = read(args.data / rel)
+        trial = read(args.data / rel, "both" if which == "bandai-each" else "right")
         for source in ("primitives", "projection"):
             res = imitate(models[which], trial, source=source)
             m, a = res.metrics, res.metrics["adonis"]
@@ -170,7 +177,7 @@ def main() -> None:
                 results.append(res)
 
     print("\n| recording | model | rebuild | segments "
-          "| rebuild vs human, deg RMS (γ β α elbow; all) "
+          "| rebuild vs human, deg RMS (γ β α elbow per arm; all) "
           "| joint space: rebuild vs human | Adonis vs human | difference | Adonis vs rebuild "
           "| completion: Adonis / human (ratio) | uncovered "
           "| baseline: mean posture held "
@@ -178,7 +185,7 @@ def main() -> None:
     print("|---|---|---|---:|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|")
     for row in rows:
         name, which, src, n, per, rb, ad, avr, (done, span, ratio), cov, _, still, bones = row
-        angles = " ".join(f"{per[k]:.1f}" for k in ("gamma", "beta", "alpha", "elbow"))
+        angles = " ".join(f"{v:.1f}" for k, v in per.items() if k != "overall")
         print(
             f"| {name} | {which} | {src} | {n} | {angles}; {per['overall']:.1f} | {rb:.2f} | "
             f"{ad:.2f} | {ad - rb:+.2f} | {avr:.2f} | {done:.2f} s / {span:.2f} s "
