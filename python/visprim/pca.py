@@ -135,7 +135,19 @@ def fit_pca(vectors: ArrayLike, n_keep: int = 0) -> PCABasis:
 
 
 def _fit_pca_gram(x: NDArray[np.float64], n_keep: int) -> PCABasis:
-    """:func:`fit_pca` through the N × N Gram matrix, for N ≤ d (see the module docstring)."""
+    """:func:`fit_pca` through the N × N Gram matrix, for N ≤ d (see the module docstring).
+
+    Its products and factorisations are small (N ≤ d, a few hundred to a few thousand) and
+    follow Rust kernels that use every core: they run on one BLAS thread, since waking
+    OpenBLAS's threads on cores that are busy costs more than the work itself.
+    """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _gram_basis(x, n_keep)
+
+
+def _gram_basis(x: NDArray[np.float64], n_keep: int) -> PCABasis:
     n, d = x.shape
     mean = x.mean(axis=0)
     xc = x - mean
