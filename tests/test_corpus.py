@@ -104,3 +104,23 @@ def test_streaming_fit_of_files_equals_the_in_memory_fit(folder):
     assert abs(lazy.inertia_ - eager.inertia_) <= 0.005 * eager.inertia_
     assert lazy.training_source_["kind"] == "files"
     assert len(lazy.training_source_["paths"]) == 12
+
+
+def test_each_arm_reads_both_arms_as_one_arm_trials(shared_data):
+    """``arm="each"``: a file's two arms, the left mirrored (as ``split_arms``), and the
+    choice survives pickling (Dask workers) and is recorded in the source."""
+    from visprim.io import read
+    from visprim.trial import split_arms
+
+    files = sorted((shared_data / "bandai_namco_ds2").glob("*.bvh"))[:2]
+    corpus = Corpus(files, arm="each")
+    got = corpus.read([0, 1])
+    want = split_arms([read(f, "both") for f in files])
+    assert [t.name for t in got] == [t.name for t in want]
+    for a, b in zip(got, want, strict=True):
+        np.testing.assert_array_equal(a.markers, b.markers)
+    assert pickle.loads(pickle.dumps(corpus)).arm == "each"
+    assert corpus.source["options"] == {"arm": "each"}
+    assert "options" not in Corpus(files).source
+    with pytest.raises(ValueError, match="arm"):
+        Corpus(files, arm="several")

@@ -74,11 +74,13 @@ def test_learn_each_arm_learns_one_arm_primitives_from_both(
     assert m.arms_ == ("right",)
     assert m.trial_names_ == [f"{f.stem}_{side}" for f in files for side in ("right", "left")]
     assert main(["report", str(model_path), "--out", str(tmp_path / "rep")]) == 0
-    # Streaming reads file by file and does not split arms: refused, not half-done.
-    stream = ["learn", str(files[0]), "--out", str(tmp_path / "s.npz"), "--arm", "each"]
-    assert main([*stream, "--stream"]) == 2
-    assert "--arm each does not apply" in capsys.readouterr().err
-    assert not (tmp_path / "s.npz").exists()
+    # Streaming reads file by file and splits each file's arms the same way.
+    streamed = tmp_path / "s.npz"
+    stream = ["learn", *map(str, files), "--out", str(streamed), "--clusters", "8", "--stream"]
+    assert main([*stream, "--arm", "each"]) == 0
+    s = PrimitiveModel.load(streamed)
+    assert s.trial_names_ == m.trial_names_ and s.n_training_segments_ == m.n_training_segments_
+    np.testing.assert_allclose(s.eigenvalues_[:30], m.eigenvalues_[:30], rtol=1e-9, atol=1e-12)
 
 
 def test_learn_with_fewer_segments_than_clusters_is_a_clear_error(

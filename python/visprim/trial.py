@@ -177,6 +177,10 @@ class Trial:
         )
 
 
+#: The ``arm`` choice that reads both arms of a recording as two one-arm trials
+#: (:func:`split_arms`): ``visprim.io.Corpus(..., arm="each")``, ``visprim learn --arm each``.
+EACH_ARM = "each"
+
 #: Reflection through the body's sagittal plane in body coordinates (y, the body's left,
 #: changes sign); the same reflection as ``visprim.io.read(..., mirror=True)``.
 _MIRROR_Y: NDArray[np.float64] = np.diag([1.0, -1.0, 1.0])

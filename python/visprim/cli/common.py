@@ -28,7 +28,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from visprim.trial import Trial
+from visprim.trial import EACH_ARM, Trial
 
 log = logging.getLogger(__name__)
 
@@ -342,11 +342,6 @@ def _mapping(text: str) -> dict[str, Any]:
             f"{source} must be a JSON object mapping each role to a name or a list of names"
         )
     return value
-
-
-#: ``--arm each``: both arms read, then each as a one-arm trial (the left one mirrored, see
-#: :func:`visprim.trial.split_arms`), for commands that read many recordings.
-EACH_ARM = "each"
 
 
 def reader_options(args: argparse.Namespace, *, allow_each: bool = False) -> dict[str, Any]:

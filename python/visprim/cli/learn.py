@@ -64,11 +64,9 @@ def _run_corpus(args: argparse.Namespace) -> int:
     data = list(args.data or [])
     if data and args.generated:
         raise common.UsageError("give DATA files or --generated, not both")
-    if str(getattr(args, "arm", "")).lower() == common.EACH_ARM:
-        raise common.UsageError("--arm each does not apply to --stream or --dask")
     try:
         corpus = (
-            Corpus(data, resample=args.resample, **common.reader_options(args))
+            Corpus(data, resample=args.resample, **common.reader_options(args, allow_each=True))
             if data
             # The lazy generated corpus is the "strokes" preset's (one trial at a time).
             else GeneratedCorpus(args.subjects, args.stimuli, args.data_seed)

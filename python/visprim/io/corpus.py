@@ -31,7 +31,8 @@ from typing import Any
 
 import numpy as np
 
-from visprim.trial import Trial
+from visprim.trial import EACH_ARM
+from visprim.trial import Trial, split_arms
 
 __all__ = ["DEFAULT_CHUNK", "Corpus", "GeneratedCorpus", "LazyCorpus", "sample_items"]
 
@@ -136,7 +137,8 @@ class Corpus(LazyCorpus):
         Expanded as :func:`visprim.io.read_many` does (folders: every recording inside,
         subfolders too unless ``recursive=False``; duplicates dropped). Expansion happens
         here, once: ``len`` is known without reading anything.
-    arm : 'right' (default) or 'left'
+    arm : 'right' (default), 'left', 'both', or 'each': both arms as two one-arm trials, the
+        left mirrored into a right arm (:func:`visprim.trial.split_arms`)
     recursive : search subfolders of folders
     on_error : 'raise' (default) or 'warn' — skip an unreadable file with a warning (as
         :func:`~visprim.io.read_many`: reader errors and unexpected errors on a file's data)
@@ -166,7 +168,7 @@ class Corpus(LazyCorpus):
         unknown = set(options) - set(_READ_OPTIONS)
         if unknown:
             raise TypeError(f"Corpus() got unexpected option(s) {', '.join(sorted(unknown))}")
-        arm = check_arm(arm)
+        arm = EACH_ARM if str(arm).lower() == EACH_ARM else check_arm(arm)
         _check_options(options)
         self.paths: list[Path] = _expand(sources, recursive)
         self.arm = arm
@@ -196,6 +198,8 @@ class Corpus(LazyCorpus):
                 for k, v in self.options.items()
                 if k not in io._FORMAT_OPTIONS or fmt in io._FORMAT_OPTIONS[k]
             }
+            if self.arm == EACH_ARM:
+                return split_arms(io.read_pieces(path, "both", **opts))
             return io.read_pieces(path, self.arm, **opts)
         except io.ReadError as exc:
             err = exc
@@ -210,11 +214,14 @@ class Corpus(LazyCorpus):
 
     @property
     def source(self) -> dict[str, Any]:
-        return {
+        source: dict[str, Any] = {
             "kind": "files",
             "paths": [str(p.resolve()) for p in self.paths],
             "resample": self.options.get("resample"),
         }
+        if self.arm != "right":
+            source["options"] = {"arm": self.arm}
+        return source
 
 
 class GeneratedCorpus(LazyCorpus):
