@@ -21,7 +21,7 @@
 //!
 //! Speed without changing the result ([`crate::lloyd`]): distances are computed directly
 //! (`Σ (x_j - c_j)²`, see [`crate::sqdist`]), and bounds on the distances (anchored Hamerly
-//! bounds, plus Elkan's per-centre bounds when `k ≤ 32`) let most rows skip the distance
+//! bounds, plus Elkan's per-centre bounds when `k ≤ 32` on CPUs with AVX-512) let most rows skip the distance
 //! computations once centres settle. A row is only skipped when the bounds prove, with a safety
 //! margin far above rounding (`1e-11 ×` the data diameter), that its nearest centre is
 //! unchanged; the labels are therefore those of plain Lloyd except for rows whose two nearest
@@ -535,10 +535,11 @@ mod tests {
             let stats = data_stats(&x, n, d, "X").unwrap();
             let (c, l, it) = reference(&x, n, d, &init, k, 500, 0.0);
             longest = longest.max(it);
-            for direct in [true, false] {
+            use crate::lloyd::Scan;
+            for scan in [Scan::Restricted, Scan::Direct, Scan::DirectElkan] {
                 let r =
-                    crate::lloyd::lloyd(&x, n, d, &init, k, 500, 0.0, stats.diameter, Some(direct));
-                assert_eq!(r.labels, l, "n={n} k={k} direct={direct}");
+                    crate::lloyd::lloyd(&x, n, d, &init, k, 500, 0.0, stats.diameter, Some(scan));
+                assert_eq!(r.labels, l, "n={n} k={k} scan={scan:?}");
                 assert_eq!(r.n_iter, it);
                 for (a, b) in r.centers.iter().zip(&c) {
                     assert!((a - b).abs() <= 1e-12);
