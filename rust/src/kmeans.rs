@@ -40,6 +40,8 @@ use crate::{Error, Result};
 
 /// Rows per distance-kernel call.
 const GROUP: usize = 64;
+/// Runs of `n_init` computed at the same time (each holds its own bounds and labels).
+const PARALLEL_RUNS: usize = 2;
 
 /// Parameters of [`kmeans`].
 #[derive(Clone, Debug, PartialEq)]
@@ -147,15 +149,26 @@ pub fn kmeans(
         return Ok(run(x, n, d, init, k, params.max_iter, tol_abs, diameter));
     }
 
-    let mut best: Option<KMeansResult> = None;
     let seed_data = SeedData::new(x, n, d);
-    for r in 0..params.n_init {
+    let one = |r: usize| {
         let mut rng = Rng::new(run_seed(params.seed, r as u64));
         let (centers, _) = seed(x, &seed_data, n, k, trials, &mut rng);
-        let res = run(x, n, d, &centers, k, params.max_iter, tol_abs, diameter);
-        if best.as_ref().is_none_or(|b| res.inertia < b.inertia) {
-            best = Some(res);
+        run(x, n, d, &centers, k, params.max_iter, tol_abs, diameter)
+    };
+    // Runs are independent: a few at a time in parallel (each also parallel inside), which
+    // keeps both cores busy through the sequential parts of a run. The winner is chosen in run
+    // order as before (first lowest inertia), so the result does not change.
+    let mut best: Option<KMeansResult> = None;
+    let mut r = 0;
+    while r < params.n_init {
+        let batch = (params.n_init - r).min(PARALLEL_RUNS);
+        let results: Vec<KMeansResult> = (r..r + batch).into_par_iter().map(one).collect();
+        for res in results {
+            if best.as_ref().is_none_or(|b| res.inertia < b.inertia) {
+                best = Some(res);
+            }
         }
+        r += batch;
     }
     Ok(best.expect("n_init ≥ 1"))
 }
