@@ -732,17 +732,6 @@ fn min_except(bounds: &[f32], skip: usize, disp: &[f64]) -> f64 {
         // SAFETY: AVX-512F detected; lengths checked above.
         return unsafe { min_except512(bounds, skip, disp) };
     }
-    #[cfg(target_arch = "x86_64")]
-    if crate::sqdist::detected_level() == crate::sqdist::Level::Avx2 {
-        // SAFETY: AVX2 detected; `disp` length checked above.
-        return unsafe { min_except_avx2(bounds, skip, disp) };
-    }
-    min_except_scalar(bounds, skip, disp)
-}
-
-/// Portable [`min_except`].
-#[inline]
-fn min_except_scalar(bounds: &[f32], skip: usize, disp: &[f64]) -> f64 {
     let mut m = f64::INFINITY;
     for (j, &l) in bounds.iter().enumerate() {
         let v = l as f64 - disp.get(j).copied().unwrap_or(0.0);
@@ -751,66 +740,6 @@ fn min_except_scalar(bounds: &[f32], skip: usize, disp: &[f64]) -> f64 {
         }
     }
     m
-}
-
-/// [`min_except`] with AVX2 (8 bounds per step in two independent accumulators, scalar
-/// tail). The minimum is exact, so the result equals the scalar one.
-///
-/// # Safety
-/// AVX2 available; `disp` empty or as long as `bounds`.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn min_except_avx2(bounds: &[f32], skip: usize, disp: &[f64]) -> f64 {
-    use std::arch::x86_64::*;
-    let len = bounds.len();
-    let inf = _mm256_set1_pd(f64::INFINITY);
-    let (mut m0, mut m1) = (inf, inf);
-    let skipv = _mm256_set1_epi64x(skip as i64);
-    let lane = _mm256_setr_epi64x(0, 1, 2, 3);
-    let has_disp = !disp.is_empty();
-    let bp = bounds.as_ptr();
-    let dp = disp.as_ptr();
-    // One 4-lane block: bounds[j..j + 4] - disp[j..j + 4], lane `skip` replaced by +inf
-    // (a macro, not a closure, so that it is compiled with AVX2).
-    macro_rules! block {
-        ($j:expr) => {{
-            let j: usize = $j;
-            // Loads in bounds: callers keep j + 4 ≤ len, and disp is as long as bounds.
-            let mut v = _mm256_cvtps_pd(_mm_loadu_ps(bp.add(j)));
-            if has_disp {
-                v = _mm256_sub_pd(v, _mm256_loadu_pd(dp.add(j)));
-            }
-            if skip >= j && skip < j + 4 {
-                let idx = _mm256_add_epi64(lane, _mm256_set1_epi64x(j as i64));
-                let hit = _mm256_castsi256_pd(_mm256_cmpeq_epi64(idx, skipv));
-                v = _mm256_blendv_pd(v, inf, hit);
-            }
-            v
-        }};
-    }
-    let mut j = 0;
-    while j + 8 <= len {
-        m0 = _mm256_min_pd(m0, block!(j));
-        m1 = _mm256_min_pd(m1, block!(j + 4));
-        j += 8;
-    }
-    if j + 4 <= len {
-        m0 = _mm256_min_pd(m0, block!(j));
-        j += 4;
-    }
-    let m = _mm256_min_pd(m0, m1);
-    let lo = _mm256_castpd256_pd128(m);
-    let hi = _mm256_extractf128_pd(m, 1);
-    let h = _mm_min_pd(lo, hi);
-    let mut r = _mm_cvtsd_f64(_mm_min_sd(h, _mm_unpackhi_pd(h, h)));
-    while j < len {
-        let v = *bp.add(j) as f64 - if has_disp { *dp.add(j) } else { 0.0 };
-        if j != skip && v < r {
-            r = v;
-        }
-        j += 1;
-    }
-    r
 }
 
 /// [`min_except`] with AVX-512 (8 bounds per step).
@@ -874,33 +803,6 @@ mod tests {
         assert_eq!(min_except(&bounds, 5, &disp), 9.5);
         assert_eq!(min_except(&bounds, 0, &[]), 11.0);
         assert_eq!(min_except(&bounds[..8], 7, &[]), 10.0);
-    }
-
-    #[test]
-    fn min_except_simd_equals_scalar() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
-        for len in 1..40 {
-            let bounds: Vec<f32> = (0..len).map(|_| (next() * 10.0) as f32).collect();
-            let disp: Vec<f64> = (0..len).map(|_| next()).collect();
-            for skip in 0..len {
-                for d in [&disp[..], &[][..]] {
-                    let want = min_except_scalar(&bounds, skip, d);
-                    assert_eq!(min_except(&bounds, skip, d), want, "len {len} skip {skip}");
-                    #[cfg(target_arch = "x86_64")]
-                    if crate::sqdist::available_levels().contains(&crate::sqdist::Level::Avx2) {
-                        // SAFETY: AVX2 detected.
-                        let got = unsafe { min_except_avx2(&bounds, skip, d) };
-                        assert_eq!(got, want, "len {len} skip {skip}");
-                    }
-                }
-            }
-        }
     }
 
     #[test]
