@@ -219,6 +219,11 @@ pub fn two_nearest(v: &[f64]) -> (usize, f64, f64) {
     if v.len() >= 8 && detected_level() == Level::Avx512 {
         return unsafe { x86::two_nearest512(v) };
     }
+    #[cfg(target_arch = "x86_64")]
+    if v.len() >= 4 && detected_level() == Level::Avx2 {
+        // SAFETY: AVX2 detected; `v.len() ≥ 4`.
+        return unsafe { x86::two_nearest256(v) };
+    }
     let (mut best, mut b, mut second) = (0, v[0], f64::INFINITY);
     for (j, &x) in v.iter().enumerate().skip(1) {
         if x < b {
@@ -586,6 +591,72 @@ mod x86 {
     /// Lane-wise best/second/index over full vectors, then a cross-lane merge and a scalar
     /// tail; same result as the sequential scan.
     ///
+    /// [`super::two_nearest`] with AVX2, branch-free: the minimum of all values, the first
+    /// index holding it, then the minimum of the others (the sequential scan's result; its
+    /// data-dependent branches mispredict on distances).
+    ///
+    /// # Safety
+    /// AVX2 available; `v.len() ≥ 4`.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn two_nearest256(v: &[f64]) -> (usize, f64, f64) {
+        let len = v.len();
+        let p = v.as_ptr();
+        let inf = _mm256_set1_pd(f64::INFINITY);
+        // Horizontal minimum of one register (a macro, so that it is compiled with AVX2).
+        macro_rules! hmin {
+            ($m:expr) => {{
+                let m: __m256d = $m;
+                let h = _mm_min_pd(_mm256_castpd256_pd128(m), _mm256_extractf128_pd(m, 1));
+                _mm_cvtsd_f64(_mm_min_sd(h, _mm_unpackhi_pd(h, h)))
+            }};
+        }
+        let body = len & !3;
+        let mut m = _mm256_loadu_pd(p);
+        let mut j = 4;
+        while j < body {
+            m = _mm256_min_pd(m, _mm256_loadu_pd(p.add(j)));
+            j += 4;
+        }
+        let mut b = hmin!(m);
+        for t in body..len {
+            b = b.min(*p.add(t));
+        }
+        // First index holding the minimum.
+        let bv = _mm256_set1_pd(b);
+        let mut best = usize::MAX;
+        let mut j = 0;
+        while j < body {
+            let hit =
+                _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_EQ_OQ>(_mm256_loadu_pd(p.add(j)), bv));
+            if hit != 0 {
+                best = j + hit.trailing_zeros() as usize;
+                break;
+            }
+            j += 4;
+        }
+        if best == usize::MAX {
+            best = (body..len).find(|&t| *p.add(t) == b).unwrap_or(0);
+        }
+        // Smallest of the others.
+        let lanes = _mm256_setr_epi64x(0, 1, 2, 3);
+        let skip = _mm256_set1_epi64x(best as i64);
+        let mut s = inf;
+        let mut j = 0;
+        while j < body {
+            let idx = _mm256_add_epi64(lanes, _mm256_set1_epi64x(j as i64));
+            let own = _mm256_castsi256_pd(_mm256_cmpeq_epi64(idx, skip));
+            s = _mm256_min_pd(s, _mm256_blendv_pd(_mm256_loadu_pd(p.add(j)), inf, own));
+            j += 4;
+        }
+        let mut second = hmin!(s);
+        for t in body..len {
+            if t != best {
+                second = second.min(*p.add(t));
+            }
+        }
+        (best, b, second)
+    }
+
     /// # Safety
     /// AVX-512F available; `v.len() ≥ 8`.
     #[target_feature(enable = "avx512f")]
@@ -758,7 +829,7 @@ mod tests {
                 .fold(f64::INFINITY, f64::min);
             (best, v[best], second)
         };
-        for len in [1usize, 2, 7, 8, 9, 16, 17, 33, 176] {
+        for len in [1usize, 2, 3, 4, 5, 7, 8, 9, 16, 17, 30, 33, 176] {
             for seed in 0..20u64 {
                 // Few distinct values: many ties, including ties for the minimum.
                 let v: Vec<f64> = values(len, seed * 31 + len as u64)
@@ -766,6 +837,12 @@ mod tests {
                     .map(|x| (x * 3.0).round())
                     .collect();
                 assert_eq!(two_nearest(&v), reference(&v), "{v:?}");
+                #[cfg(target_arch = "x86_64")]
+                if len >= 4 && available_levels().contains(&Level::Avx2) {
+                    // SAFETY: AVX2 detected, `len ≥ 4`.
+                    let got = unsafe { x86::two_nearest256(&v) };
+                    assert_eq!(got, reference(&v), "{v:?}");
+                }
             }
         }
     }
