@@ -31,8 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from visprim.trial import EACH_ARM
-from visprim.trial import Trial, split_arms
+from visprim.trial import EACH_ARM, Trial, split_arms
 
 __all__ = ["DEFAULT_CHUNK", "Corpus", "GeneratedCorpus", "LazyCorpus", "sample_items"]
 
