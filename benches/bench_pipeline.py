@@ -5,9 +5,8 @@ Workload: 10,000 generated trials (``--quick``: 600) → zero-phase Butterworth 
 SEG-1 → every segment resampled to 100 samples per angle (400-D) → PCA keeping 30
 eigenvectors → k-means with 30 clusters (k-means++ seeding, 4 restarts, Lloyd, float64).
 
-Both pipelines start from the same inverse-kinematics angles (computed once, untimed) and
-share the conversion of crossing frames to seconds (numpy in visprim too). They differ where
-visprim uses its Rust kernels:
+Both pipelines start from the same inverse-kinematics angles (computed once, untimed). They
+differ where visprim uses its Rust kernels:
 
 ============  =====================================  =========================================
 stage         visprim                                reference
@@ -16,8 +15,8 @@ filter        ``sosfiltfilt_ragged`` (one call)      ``scipy.signal.sosfiltfilt`
                                                      of equal-length trials (batched by length)
 velocity      ``gradient_ragged``                    ``np.gradient``'s uneven-step formula on
                                                      the whole corpus (one numpy pass)
-ZVC           ``zero_velocity_crossings_ragged``     numpy: sign changes on the whole corpus,
-                                                     then the significant-movement walk batched
+ZVC           ``zero_velocity_crossings_ragged``,    numpy: sign changes on the whole corpus,
+              ``frames_to_times``                    then the significant-movement walk batched
                                                      over all (trial, angle) series
 SEG-1         ``seg1_events``, ``times_to_frames``   numpy: lexsort by (trial, time), events by
                                                      cumsum/bincount, ``searchsorted`` frames
@@ -53,7 +52,6 @@ from visprim.filtering import lowpass_concatenated
 from visprim.ik import arm_angles_corpus
 from visprim.pca import fit_pca
 from visprim.segment import segment_concatenated
-from visprim.segment.clock import frames_to_times
 from visprim.segment.zvc import CorpusCrossings
 
 ORDER, CUTOFF, MIN_CHANGE_DEG, N_SAMPLES, F, K, N_INIT, SEED = 10, 0.25, 5.0, 100, 30, 30, 4, 0
@@ -172,7 +170,15 @@ def ref_crossings(times, angles, offsets, min_change_deg):
     keep = keep_grid[np.repeat(np.arange(starts.size), counts), rank]
     tr, ch, gframe = tr[keep], ch[keep], gframe[keep]
     frame = gframe - offsets[tr]
-    return CorpusCrossings(tr, ch, frame, frames_to_times(times, offsets, tr, frame))
+    return CorpusCrossings(tr, ch, frame, ref_frames_to_times(times, offsets, tr, frame))
+
+
+def ref_frames_to_times(times, offsets, trial, frame):
+    """Seconds of fractional frames (relative to each trial's start), in numpy."""
+    last = np.append(offsets[1:], times.shape[0]) - 1
+    g = offsets[trial] + frame
+    i = np.maximum(np.minimum(np.floor(g).astype(np.int64), last[trial] - 1), offsets[trial])
+    return times[i] + (g - i) * (times[i + 1] - times[i])
 
 
 def ref_seg1(crossings, window=0.3, min_dofs=2):

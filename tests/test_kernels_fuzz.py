@@ -236,3 +236,10 @@ def test_trial_and_channel_indices(trial: list[int], channel: st.DataObject) -> 
         ok_t2f,
         lambda: K.times_to_frames(np.arange(50.0), [0, 20], tr, t),
     )
+    check(
+        "frames_to_times",
+        "trial",
+        len(trial),
+        ok_t2f,
+        lambda: K.frames_to_times(np.arange(50.0), [0, 20], tr, t),
+    )

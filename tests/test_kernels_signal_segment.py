@@ -171,6 +171,42 @@ def test_times_to_frames_is_interp_per_trial(lengths: list[int], seed: int) -> N
     np.testing.assert_allclose(got, ref, rtol=0, atol=1e-9)
 
 
+@SETTINGS
+@given(lengths=st.lists(st.integers(2, 40), min_size=1, max_size=6), seed=st.integers(0, 2**31))
+def test_frames_to_times_is_interp_per_trial(lengths: list[int], seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    times, offsets = ragged_clock(rng, lengths)
+    n = np.asarray(lengths)
+    trial = rng.integers(0, len(lengths), size=50).astype(np.int64)
+    frame = rng.uniform(-0.5, n[trial] - 0.5)  # some beyond either end: extrapolated
+    frame[:5] = np.floor(frame[:5]).clip(0)  # exactly on frames
+    got = K.frames_to_times(times, offsets, trial, frame)
+    ref = []
+    for k, f in zip(trial, frame, strict=True):
+        tt = times[offsets[k] : offsets[k] + n[k]]
+        i = int(min(max(np.floor(f), 0), n[k] - 2))
+        ref.append(tt[i] + (f - i) * (tt[i + 1] - tt[i]))
+    np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12)
+    # The converse of times_to_frames inside each trial.
+    inside = np.clip(frame, 0, n[trial] - 1)
+    back = K.times_to_frames(
+        times, offsets, trial, K.frames_to_times(times, offsets, trial, inside)
+    )
+    np.testing.assert_allclose(back, inside, rtol=0, atol=1e-9)
+
+
+def test_frames_to_times_errors() -> None:
+    times = np.array([0.0, 0.1, 0.2, 0.0])
+    with pytest.raises(ValueError, match=r"trial\[0\] = 2 is not a trial index"):
+        K.frames_to_times(times, [0, 3], [2], [0.0])
+    with pytest.raises(ValueError, match="NaN or infinity"):
+        K.frames_to_times(times, [0, 3], [0], [np.inf])
+    with pytest.raises(ValueError, match="fewer than 2 frames"):
+        K.frames_to_times(times, [0, 3], [1], [0.0])
+    with pytest.raises(ValueError, match="same length"):
+        K.frames_to_times(times, [0, 3], [0, 0], [0.0])
+
+
 def test_times_to_frames_errors() -> None:
     times = np.array([0.0, 0.1, 0.2, 0.0, 0.1])
     with pytest.raises(ValueError, match=r"trial\[0\] = 2 is not a trial index"):

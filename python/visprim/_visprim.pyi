@@ -28,6 +28,12 @@ def zero_velocity_crossings(
     min_change: float = 0.0,
     positions: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]: ...
+def zero_velocity_crossings_of_positions(
+    times: NDArray[np.float64],
+    positions: NDArray[np.float64],
+    offsets: NDArray[np.int64],
+    min_change: float = ...,
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]: ...
 def zero_velocity_crossings_ragged(
     velocity: NDArray[np.float64],
     offsets: NDArray[np.int64],
@@ -45,6 +51,12 @@ def times_to_frames(
     offsets: NDArray[np.int64],
     trial: NDArray[np.int64],
     t: NDArray[np.float64],
+) -> NDArray[np.float64]: ...
+def frames_to_times(
+    times: NDArray[np.float64],
+    offsets: NDArray[np.int64],
+    trial: NDArray[np.int64],
+    frame: NDArray[np.float64],
 ) -> NDArray[np.float64]: ...
 def resample_segments(
     values: NDArray[np.float64],

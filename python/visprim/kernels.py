@@ -236,6 +236,31 @@ def zero_velocity_crossings_ragged(
     )
 
 
+def zero_velocity_crossings_of_positions(
+    times: ArrayLike, positions: ArrayLike, offsets: ArrayLike, min_change: float = 0.0
+) -> tuple[_I64, _I64, _F64]:
+    """:func:`zero_velocity_crossings_ragged` of the velocity of ``positions``, computed trial
+    by trial (no corpus-sized velocity array).
+
+    The velocity is :func:`gradient_ragged` of ``positions`` on ``times`` and the crossings are
+    interpolated on ``positions``: the result is identical to
+    ``zero_velocity_crossings_ragged(gradient_ragged(times, positions, offsets), offsets,
+    min_change, positions)``.
+
+    Args:
+        times: ``(total_frames,)`` float64 seconds, strictly increasing within each trial.
+        positions: ``(total_frames, channels)`` float64 (1-D: one channel), e.g. radians.
+        offsets: first frame of each trial (each trial has >= 2 frames).
+        min_change: significant-movement threshold, in the unit of ``positions``.
+
+    Returns:
+        ``(trial, channel, frame)`` as :func:`zero_velocity_crossings_ragged`.
+    """
+    return _visprim.zero_velocity_crossings_of_positions(
+        _f64(times, "times"), _f64(positions, "positions"), _index(offsets), min_change
+    )
+
+
 def seg1_events(
     trial: ArrayLike, channel: ArrayLike, time: ArrayLike, window: float
 ) -> tuple[_I64, _F64, _I64]:
@@ -280,6 +305,30 @@ def times_to_frames(times: ArrayLike, offsets: ArrayLike, trial: ArrayLike, t: A
     """
     return _visprim.times_to_frames(
         _f64(times, "times"), _index(offsets), _index(trial, "trial"), _f64(t, "t")
+    )
+
+
+def frames_to_times(
+    times: ArrayLike, offsets: ArrayLike, trial: ArrayLike, frame: ArrayLike
+) -> _F64:
+    """Seconds of fractional frame indices on a concatenated corpus's own timestamps (the
+    converse of :func:`times_to_frames`).
+
+    ``frame[i]`` (relative to the first frame of trial ``trial[i]``) is placed by linear
+    interpolation between the two timestamps around it; frames before the first or after the
+    last one are extrapolated from the trial's first or last interval.
+
+    Args:
+        times: ``(total_frames,)`` float64 seconds.
+        offsets: first frame of each trial (as in :func:`sosfiltfilt_ragged`).
+        trial: int64 ``(m,)`` trial index of each query; each queried trial has >= 2 frames.
+        frame: float64 ``(m,)`` fractional frames.
+
+    Returns:
+        float64 ``(m,)`` seconds on each trial's clock.
+    """
+    return _visprim.frames_to_times(
+        _f64(times, "times"), _index(offsets), _index(trial, "trial"), _f64(frame, "frame")
     )
 
 

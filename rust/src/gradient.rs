@@ -61,7 +61,7 @@ fn check_times(t: &[f64], trial: usize, first: usize) -> Result<()> {
 
 /// Interior weights of one trial (reused buffers): `w[i] = (a, b, c)` for frame `i + 1`.
 #[derive(Default)]
-struct Weights {
+pub(crate) struct Weights {
     a: Vec<f64>,
     b: Vec<f64>,
     c: Vec<f64>,
@@ -105,16 +105,14 @@ fn gradient_trial(t: &[f64], x: &[f64], channels: usize, w: &mut Weights, out: &
     }
 }
 
-/// Time derivative of every trial of a ragged corpus: `times` `(total_frames,)` seconds (each
-/// trial's clock, strictly increasing within a trial), `values` `(total_frames, channels)`
-/// row-major, `offsets` the first frame of each trial. Returns `(total_frames, channels)`
-/// row-major, per trial equal to `numpy.gradient(values_i, times_i, axis=0)`.
-pub fn gradient_ragged(
+/// Checks a ragged corpus for [`gradient_ragged`] (shapes, offsets, at least two frames per
+/// trial) and returns each trial's frame range.
+pub(crate) fn check_corpus(
     times: &[f64],
     values: &[f64],
     channels: usize,
     offsets: &[i64],
-) -> Result<Vec<f64>> {
+) -> Result<Vec<(usize, usize)>> {
     if channels == 0 || values.is_empty() {
         return Err(Error::Shape(
             "values is empty: need at least two frames and one channel".into(),
@@ -140,6 +138,35 @@ pub fn gradient_ragged(
             bounds[k].0
         )));
     }
+    Ok(bounds)
+}
+
+/// The derivative of one trial into `out` after checking its timestamps (`trial` and `first`,
+/// its index and first frame, name it in the error).
+pub(crate) fn trial_gradient(
+    t: &[f64],
+    x: &[f64],
+    channels: usize,
+    (trial, first): (usize, usize),
+    w: &mut Weights,
+    out: &mut [f64],
+) -> Result<()> {
+    check_times(t, trial, first)?;
+    gradient_trial(t, x, channels, w, out);
+    Ok(())
+}
+
+/// Time derivative of every trial of a ragged corpus: `times` `(total_frames,)` seconds (each
+/// trial's clock, strictly increasing within a trial), `values` `(total_frames, channels)`
+/// row-major, `offsets` the first frame of each trial. Returns `(total_frames, channels)`
+/// row-major, per trial equal to `numpy.gradient(values_i, times_i, axis=0)`.
+pub fn gradient_ragged(
+    times: &[f64],
+    values: &[f64],
+    channels: usize,
+    offsets: &[i64],
+) -> Result<Vec<f64>> {
+    let bounds = check_corpus(times, values, channels, offsets)?;
     let mut out = crate::buffer::zeroed_f64(values.len());
     // Disjoint output slices, one per task of TRIALS_PER_TASK consecutive trials.
     let mut tasks: Vec<Task<'_>> = Vec::new();
@@ -157,14 +184,14 @@ pub fn gradient_ragged(
             let mut w = Weights::default();
             for (j, &(s, e)) in chunk.iter().enumerate() {
                 let t = &times[s..e];
-                check_times(t, first_trial + j, s)?;
-                gradient_trial(
+                trial_gradient(
                     t,
                     &values[s * channels..e * channels],
                     channels,
+                    (first_trial + j, s),
                     &mut w,
                     &mut out[(s - base) * channels..(e - base) * channels],
-                );
+                )?;
             }
             Ok(())
         })

@@ -325,6 +325,83 @@ pub fn zero_velocity_crossings_ragged(
     Ok(all)
 }
 
+/// [`zero_velocity_crossings_ragged`] of the velocity of `positions`: each trial's velocity is
+/// [`crate::gradient`]'s (`numpy.gradient` on the trial's own `times`, seconds), computed
+/// trial by trial into a small buffer instead of a corpus-sized array, and its crossings are
+/// interpolated on `positions`. The result is identical to `gradient_ragged` followed by
+/// `zero_velocity_crossings_ragged(velocity, ..., Some(positions))`.
+pub fn zero_velocity_crossings_of_positions(
+    times: &[f64],
+    positions: &[f64],
+    channels: usize,
+    offsets: &[i64],
+    min_change: f64,
+) -> Result<Crossings> {
+    let bounds = crate::gradient::check_corpus(times, positions, channels, offsets)?;
+    if !(min_change.is_finite() && min_change >= 0.0) {
+        return Err(Error::InvalidArgument(format!(
+            "min_change must be a finite number >= 0, got {min_change}"
+        )));
+    }
+    let parts: Vec<Result<Crossings>> = bounds
+        .par_chunks(TRIALS_PER_TASK)
+        .enumerate()
+        .map(|(k, chunk)| {
+            let mut out = Crossings::default();
+            let mut scratch = Scratch::default();
+            let mut weights = Default::default();
+            let mut vel = Vec::new();
+            for (j, &(s, e)) in chunk.iter().enumerate() {
+                let trial = k * TRIALS_PER_TASK + j;
+                let (a, b) = (s * channels, e * channels);
+                vel.clear();
+                vel.resize(b - a, 0.0);
+                let pos = &positions[a..b];
+                crate::gradient::trial_gradient(
+                    &times[s..e],
+                    pos,
+                    channels,
+                    (trial, s),
+                    &mut weights,
+                    &mut vel,
+                )?;
+                let (pos, vel) = (Some(pos), &vel[..]);
+                if !scan_trial(
+                    vel,
+                    pos,
+                    channels,
+                    min_change,
+                    trial as i64,
+                    &mut scratch,
+                    &mut out,
+                ) {
+                    let (name, i) = match first_non_finite(&positions[a..b]) {
+                        Some(i) => ("positions", i),
+                        None => (
+                            "the velocity of positions",
+                            first_non_finite(vel).unwrap_or(0),
+                        ),
+                    };
+                    return Err(Error::NonFinite(format!(
+                        "{name} contains NaN or infinity (frame {}, channel {})",
+                        s + i / channels,
+                        i % channels
+                    )));
+                }
+            }
+            Ok(out)
+        })
+        .collect();
+    let mut all = Crossings::default();
+    for p in parts {
+        let p = p?;
+        all.trial.extend(p.trial);
+        all.channel.extend(p.channel);
+        all.frame.extend(p.frame);
+    }
+    Ok(all)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -488,6 +565,56 @@ mod tests {
         assert_eq!(r.trial, vec![0, 0, 1, 1]);
         assert_eq!(r.channel, vec![0, 1, 0, 1]);
         assert_eq!(r.frame, vec![0.5, 1.5, 1.5, 2.25]);
+    }
+
+    #[test]
+    fn from_positions_equals_gradient_then_crossings() {
+        // Three trials of two channels on jittered clocks, with exact zeros and plateaus.
+        let lengths = [40usize, 2, 57];
+        let mut times = Vec::new();
+        let mut pos = Vec::new();
+        let mut offsets = Vec::new();
+        let mut t = 0.0;
+        for (k, &n) in lengths.iter().enumerate() {
+            offsets.push(times.len() as i64);
+            for f in 0..n {
+                t += 0.03 + 0.01 * ((f * 7 + k) % 5) as f64;
+                times.push(t);
+                let x = f as f64 * 0.2;
+                pos.push((x + k as f64).sin());
+                pos.push(if (10..14).contains(&f) {
+                    0.5
+                } else {
+                    (0.7 * x).cos()
+                });
+            }
+        }
+        let vel = crate::gradient::gradient_ragged(&times, &pos, 2, &offsets).unwrap();
+        for min_change in [0.0, 0.05] {
+            let want =
+                zero_velocity_crossings_ragged(&vel, 2, &offsets, min_change, Some(&pos)).unwrap();
+            let got = zero_velocity_crossings_of_positions(&times, &pos, 2, &offsets, min_change)
+                .unwrap();
+            assert!(!want.frame.is_empty());
+            assert_eq!(got.trial, want.trial);
+            assert_eq!(got.channel, want.channel);
+            assert_eq!(got.frame, want.frame);
+        }
+        let mut bad = pos.clone();
+        bad[2 * 45 + 1] = f64::NAN;
+        let err = zero_velocity_crossings_of_positions(&times, &bad, 2, &offsets, 0.0).unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("positions contains NaN or infinity (frame 45, channel 1)"),
+            "{err}"
+        );
+        let mut clock = times.clone();
+        clock[50] = clock[49];
+        let err = zero_velocity_crossings_of_positions(&clock, &pos, 2, &offsets, 0.0).unwrap_err();
+        assert!(err.to_string().contains("strictly increasing"), "{err}");
+        let err =
+            zero_velocity_crossings_of_positions(&times, &pos, 2, &offsets, -1.0).unwrap_err();
+        assert!(matches!(err, Error::InvalidArgument(_)), "{err}");
     }
 
     #[test]

@@ -10,10 +10,6 @@ from visprim import kernels
 __all__ = ["frames_to_times", "times_to_frames"]
 
 
-def _last_frames(n: int, offsets: NDArray[np.int64]) -> NDArray[np.int64]:
-    return np.append(offsets[1:], n) - 1
-
-
 def frames_to_times(
     times: NDArray[np.float64],
     offsets: NDArray[np.int64],
@@ -21,12 +17,9 @@ def frames_to_times(
     frame: NDArray[np.float64],
 ) -> NDArray[np.float64]:
     """Seconds of fractional frame indices (relative to each trial's first frame), by linear
-    interpolation of the concatenated timestamps ``times``."""
-    last = _last_frames(times.shape[0], offsets)
-    g = offsets[trial] + np.asarray(frame, dtype=np.float64)
-    i = np.minimum(np.floor(g).astype(np.int64), last[trial] - 1)
-    i = np.maximum(i, offsets[trial])
-    return times[i] + (g - i) * (times[i + 1] - times[i])
+    interpolation of the concatenated timestamps ``times`` (Rust kernel
+    :func:`visprim.kernels.frames_to_times`)."""
+    return kernels.frames_to_times(times, offsets, trial, np.asarray(frame, dtype=np.float64))
 
 
 def times_to_frames(

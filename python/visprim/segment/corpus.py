@@ -143,18 +143,19 @@ def segment_concatenated(
         raise ValueError("offsets must be a non-empty increasing 1-D array starting at 0")
     if off[-1] >= a.shape[0]:
         raise ValueError(f"offsets must be < the number of frames ({a.shape[0]})")
-    v = velocity_concatenated(t, a, off)
     z = None
     c = None
     per_trial = None
     if method == "seg1":
-        crossings = zvc_concatenated(t, a, off, min_change_deg=min_change_deg, velocity=v)
+        crossings = zvc_concatenated(t, a, off, min_change_deg=min_change_deg)
         trial, start, end = seg1_from_crossings(
             crossings, window=window, min_dofs=min_dofs, adaptive=seg1_adaptive
         )
-        start_frame = times_to_frames(t, off, trial, start)
-        end_frame = times_to_frames(t, off, trial, end)
+        # One kernel call for both ends (each queried trial's clock is checked once).
+        frames = times_to_frames(t, off, np.tile(trial, 2), np.concatenate([start, end]))
+        start_frame, end_frame = frames[: trial.size], frames[trial.size :]
     elif method == "seg2":
+        v = velocity_concatenated(t, a, off)
         z = np.einsum("ij,ij->i", v, v)
         if tuning not in TUNINGS:
             raise ValueError(f"tuning must be one of {list(TUNINGS)}, got {tuning!r}")

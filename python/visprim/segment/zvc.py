@@ -23,7 +23,6 @@ from numpy.typing import ArrayLike, NDArray
 
 from visprim import kernels
 from visprim.segment.clock import frames_to_times
-from visprim.segment.velocity import velocity_concatenated
 
 __all__ = [
     "DEFAULT_MIN_CHANGE_DEG",
@@ -80,14 +79,13 @@ def zvc_concatenated(
     t = np.ascontiguousarray(times, dtype=np.float64)
     a = np.ascontiguousarray(angles, dtype=np.float64)
     off = np.ascontiguousarray(offsets, dtype=np.int64)
-    v = (
-        velocity_concatenated(t, a, off)
-        if velocity is None
-        else np.ascontiguousarray(velocity, dtype=np.float64)
-    )
-    trial, dof, frame = kernels.zero_velocity_crossings_ragged(
-        v, off, float(np.deg2rad(min_change_deg)), positions=a
-    )
+    min_change = float(np.deg2rad(min_change_deg))
+    if velocity is None:
+        # Velocity trial by trial inside the kernel (no corpus-sized array).
+        trial, dof, frame = kernels.zero_velocity_crossings_of_positions(t, a, off, min_change)
+    else:
+        v = np.ascontiguousarray(velocity, dtype=np.float64)
+        trial, dof, frame = kernels.zero_velocity_crossings_ragged(v, off, min_change, positions=a)
     trial = np.asarray(trial, dtype=np.int64)
     frame = np.asarray(frame, dtype=np.float64)
     return CorpusCrossings(

@@ -108,8 +108,15 @@ fn offsets_arg(obj: &Bound<'_, PyAny>) -> PyResult<Vec<i64>> {
             shape_str(arr.shape())
         )));
     }
-    let arr = arr.cast::<PyArrayDyn<i64>>()?.readonly();
-    Ok(arr.as_array().iter().copied().collect())
+    copy_i64(&arr.cast::<PyArrayDyn<i64>>()?.readonly(), "offsets")
+}
+
+/// The values of an int64 array, copied (one memory copy when contiguous).
+fn copy_i64(arr: &numpy::PyReadonlyArrayDyn<'_, i64>, name: &str) -> PyResult<Vec<i64>> {
+    match arr.as_slice() {
+        Ok(values) => Ok(crate::buffer::try_copy(values, name)?),
+        Err(_) => Ok(arr.as_array().iter().copied().collect()),
+    }
 }
 
 /// A 1-D int64 array argument, copied to a vector.
@@ -127,8 +134,7 @@ fn i64_vec(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i64>> {
             shape_str(arr.shape())
         )));
     }
-    let arr = arr.cast::<PyArrayDyn<i64>>()?.readonly();
-    Ok(arr.as_array().iter().copied().collect())
+    copy_i64(&arr.cast::<PyArrayDyn<i64>>()?.readonly(), name)
 }
 
 /// `sos` as a list of sections.
@@ -327,6 +333,43 @@ fn zero_velocity_crossings_ragged<'py>(
     ))
 }
 
+/// Zero-velocity crossings of the velocity (`numpy.gradient` on `times`) of `positions`
+/// `(total_frames, channels)` (1-D: one channel), without a corpus-sized velocity array.
+#[pyfunction]
+#[pyo3(signature = (times, positions, offsets, min_change=Real(0.0)))]
+fn zero_velocity_crossings_of_positions<'py>(
+    py: Python<'py>,
+    times: &Bound<'py, PyAny>,
+    positions: &Bound<'py, PyAny>,
+    offsets: &Bound<'py, PyAny>,
+    min_change: Real,
+) -> PyResult<Crossings3<'py>> {
+    let t = f64_arg(times, "times", &[1])?;
+    let p = f64_arg(positions, "positions", &[1, 2])?;
+    let offsets = offsets_arg(offsets)?;
+    let min_change = min_change_arg(min_change)?;
+    let (frames, channels) = frames_channels(&p.shape);
+    if t.shape[0] != frames {
+        return Err(PyValueError::new_err(format!(
+            "times must have shape ({frames},) to match positions {}, got {}",
+            shape_str(&p.shape),
+            shape_str(&t.shape)
+        )));
+    }
+    let tv = t.values();
+    let tv: &[f64] = &tv;
+    let pv = p.values();
+    let pv: &[f64] = &pv;
+    let c = py.detach(|| {
+        zvc::zero_velocity_crossings_of_positions(tv, pv, channels, &offsets, min_change)
+    })?;
+    Ok((
+        c.trial.into_pyarray(py),
+        c.channel.into_pyarray(py),
+        c.frame.into_pyarray(py),
+    ))
+}
+
 /// Time derivative of every trial of a ragged corpus `values` `(total_frames, channels)` (1-D:
 /// one channel) on its timestamps `times` `(total_frames,)`: `numpy.gradient` per trial.
 #[pyfunction]
@@ -409,6 +452,28 @@ fn times_to_frames<'py>(
     Ok(out.into_pyarray(py))
 }
 
+/// Seconds of fractional frames `frame` (relative to each trial's first frame) of trials
+/// `trial`, by linear interpolation of the ragged corpus's `times`.
+#[pyfunction]
+fn frames_to_times<'py>(
+    py: Python<'py>,
+    times: &Bound<'py, PyAny>,
+    offsets: &Bound<'py, PyAny>,
+    trial: &Bound<'py, PyAny>,
+    frame: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let times = f64_arg(times, "times", &[1])?;
+    let offsets = offsets_arg(offsets)?;
+    let trial = i64_vec(trial, "trial")?;
+    let f = f64_arg(frame, "frame", &[1])?;
+    let tv = times.values();
+    let tv: &[f64] = &tv;
+    let fv = f.values();
+    let fv: &[f64] = &fv;
+    let out = py.detach(|| clock::frames_to_times(tv, &offsets, &trial, fv))?;
+    Ok(out.into_pyarray(py))
+}
+
 /// Each segment `[starts[i], ends[i]]` (fractional frames) of `values` `(frames, channels)`
 /// linearly resampled to `n` points per channel: `(n_segments, channels * n)`, channel-major.
 #[pyfunction]
@@ -449,6 +514,8 @@ pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(zero_velocity_crossings_ragged, m)?)?;
     m.add_function(wrap_pyfunction!(seg1_events, m)?)?;
     m.add_function(wrap_pyfunction!(times_to_frames, m)?)?;
+    m.add_function(wrap_pyfunction!(zero_velocity_crossings_of_positions, m)?)?;
+    m.add_function(wrap_pyfunction!(frames_to_times, m)?)?;
     m.add_function(wrap_pyfunction!(resample_segments, m)?)?;
     Ok(())
 }
