@@ -272,32 +272,35 @@ fn blocked<const P: usize>(
 /// Hint the CPU to load a row into cache.
 #[inline(always)]
 pub fn prefetch_row(row: &[f64]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        let p = row.as_ptr() as *const i8;
-        let bytes = std::mem::size_of_val(row);
-        let mut off = 0;
-        while off < bytes {
-            // SAFETY: prefetching is a hint and never faults; the address is inside `row`.
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add(off)) };
-            off += 64;
-        }
-        // The last line, when the row is not 64-byte aligned.
-        if bytes > 0 {
-            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add(bytes - 1)) };
-        }
-    }
+    prefetch_bytes(row.as_ptr().cast(), std::mem::size_of_val(row));
 }
 
 /// [`prefetch_row`] for a single-precision row.
 #[inline(always)]
 pub fn prefetch_row32(row: &[f32]) {
-    // SAFETY: same memory, viewed as bytes for the hint only.
-    let bytes = unsafe {
-        std::slice::from_raw_parts(row.as_ptr() as *const f64, std::mem::size_of_val(row) / 8)
-    };
-    prefetch_row(bytes);
+    prefetch_bytes(row.as_ptr().cast(), std::mem::size_of_val(row));
+}
+
+/// Prefetch the cache lines of `bytes` bytes from `p` (the memory of a slice).
+#[inline(always)]
+fn prefetch_bytes(p: *const i8, bytes: usize) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        let mut off = 0;
+        while off < bytes {
+            // SAFETY: prefetching is a hint and never faults; the address is inside the slice
+            // the caller took `p` and `bytes` from.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off)) };
+            off += 64;
+        }
+        // The last line, when the row is not 64-byte aligned.
+        if bytes > 0 {
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(bytes - 1)) };
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (p, bytes);
 }
 
 fn scalar_dists(rows: &[&[f64]], panel: &Panel, out: &mut [f64]) {
