@@ -73,31 +73,53 @@ pub fn frames_to_times(
     trial: &[i64],
     frame: &[f64],
 ) -> Result<Vec<f64>> {
-    if trial.len() != frame.len() {
+    let bounds = check_queries(times, offsets, trial, frame, "frame", false)?;
+    per_query(trial, frame, |k, f| {
+        let (s, e) = bounds[k];
+        // The same operations as numpy on the global frame index `s + f`.
+        let g = s as f64 + f;
+        let i = (g.floor().max(s as f64) as usize).min(e - 2);
+        times[i] + (g - i as f64) * (times[i + 1] - times[i])
+    })
+}
+
+/// The checks shared by both conversions: `trial` and the query values `q` (called `name`)
+/// of equal length, `offsets` valid for `times`, finite queries, and the queried trials (see
+/// [`check_trials`]). Returns each trial's frame range.
+fn check_queries(
+    times: &[f64],
+    offsets: &[i64],
+    trial: &[i64],
+    q: &[f64],
+    name: &str,
+    increasing: bool,
+) -> Result<Vec<(usize, usize)>> {
+    if trial.len() != q.len() {
         return Err(Error::Shape(format!(
-            "trial and frame must have the same length, got {} and {}",
+            "trial and {name} must have the same length, got {} and {}",
             trial.len(),
-            frame.len()
+            q.len()
         )));
     }
     let bounds = trial_bounds(offsets, times.len())?;
-    if let Some(i) = frame.iter().position(|x| !x.is_finite()) {
+    if let Some(i) = q.iter().position(|x| !x.is_finite()) {
         return Err(Error::NonFinite(format!(
-            "frame contains NaN or infinity (query {i})"
+            "{name} contains NaN or infinity (query {i})"
         )));
     }
-    check_trials(times, &bounds, trial, false)?;
-    let mut out = crate::buffer::try_zeroed_f64(frame.len(), "the times")?;
+    check_trials(times, &bounds, trial, increasing)?;
+    Ok(bounds)
+}
+
+/// `f(trial[i], q[i])` for every query, in parallel chunks (`trial` already checked).
+fn per_query(trial: &[i64], q: &[f64], f: impl Fn(usize, f64) -> f64 + Sync) -> Result<Vec<f64>> {
+    let mut out = crate::buffer::try_zeroed_f64(q.len(), "the converted queries")?;
     out.par_chunks_mut(QUERIES_PER_TASK)
         .zip(trial.par_chunks(QUERIES_PER_TASK))
-        .zip(frame.par_chunks(QUERIES_PER_TASK))
-        .for_each(|((out, trial), frame)| {
-            for ((o, &k), &f) in out.iter_mut().zip(trial).zip(frame) {
-                let (s, e) = bounds[k as usize];
-                // The same operations as numpy on the global frame index `s + f`.
-                let g = s as f64 + f;
-                let i = (g.floor().max(s as f64) as usize).min(e - 2);
-                *o = times[i] + (g - i as f64) * (times[i + 1] - times[i]);
+        .zip(q.par_chunks(QUERIES_PER_TASK))
+        .for_each(|((out, trial), q)| {
+            for ((o, &k), &x) in out.iter_mut().zip(trial).zip(q) {
+                *o = f(k as usize, x);
             }
         });
     Ok(out)
@@ -122,31 +144,11 @@ pub fn times_to_frames(
     trial: &[i64],
     t: &[f64],
 ) -> Result<Vec<f64>> {
-    if trial.len() != t.len() {
-        return Err(Error::Shape(format!(
-            "trial and t must have the same length, got {} and {}",
-            trial.len(),
-            t.len()
-        )));
-    }
-    let bounds = trial_bounds(offsets, times.len())?;
-    if let Some(i) = t.iter().position(|x| !x.is_finite()) {
-        return Err(Error::NonFinite(format!(
-            "t contains NaN or infinity (query {i})"
-        )));
-    }
-    check_trials(times, &bounds, trial, true)?;
-    let mut out = vec![0.0; t.len()];
-    out.par_chunks_mut(QUERIES_PER_TASK)
-        .zip(trial.par_chunks(QUERIES_PER_TASK))
-        .zip(t.par_chunks(QUERIES_PER_TASK))
-        .for_each(|((out, trial), t)| {
-            for ((o, &k), &x) in out.iter_mut().zip(trial).zip(t) {
-                let (s, e) = bounds[k as usize];
-                *o = frame_of(&times[s..e], x);
-            }
-        });
-    Ok(out)
+    let bounds = check_queries(times, offsets, trial, t, "t", true)?;
+    per_query(trial, t, |k, x| {
+        let (s, e) = bounds[k];
+        frame_of(&times[s..e], x)
+    })
 }
 
 #[cfg(test)]

@@ -35,6 +35,24 @@ pub struct Crossings {
     pub frame: Vec<f64>,
 }
 
+impl Crossings {
+    /// The crossings of `parts`, one after the other.
+    fn concat(parts: Vec<Crossings>) -> Self {
+        let n: usize = parts.iter().map(|p| p.frame.len()).sum();
+        let mut all = Crossings {
+            trial: Vec::with_capacity(n),
+            channel: Vec::with_capacity(n),
+            frame: Vec::with_capacity(n),
+        };
+        for p in parts {
+            all.trial.extend(p.trial);
+            all.channel.extend(p.channel);
+            all.frame.extend(p.frame);
+        }
+        all
+    }
+}
+
 /// Interpolated value of a channel at fractional frame `i0 + frac` (`frac` in `[0, 1]`).
 #[inline]
 fn interp(p: impl Fn(usize) -> f64, i0: usize, frac: f64) -> f64 {
@@ -201,6 +219,16 @@ fn scan_trial(
     true
 }
 
+/// The significant-movement threshold must be a finite number >= 0.
+fn check_min_change(min_change: f64) -> Result<()> {
+    if min_change.is_finite() && min_change >= 0.0 {
+        return Ok(());
+    }
+    Err(Error::InvalidArgument(format!(
+        "min_change must be a finite number >= 0, got {min_change}"
+    )))
+}
+
 fn check_inputs(
     velocity: &[f64],
     channels: usize,
@@ -218,11 +246,7 @@ fn check_inputs(
             velocity.len()
         )));
     }
-    if !(min_change.is_finite() && min_change >= 0.0) {
-        return Err(Error::InvalidArgument(format!(
-            "min_change must be a finite number >= 0, got {min_change}"
-        )));
-    }
+    check_min_change(min_change)?;
     if let Some(p) = positions {
         if p.len() != velocity.len() {
             return Err(Error::Shape(format!(
@@ -311,18 +335,7 @@ pub fn zero_velocity_crossings_ragged(
     if parts.iter().any(Option::is_none) {
         return Err(non_finite_error(velocity, positions, channels));
     }
-    let n: usize = parts.iter().flatten().map(|p| p.frame.len()).sum();
-    let mut all = Crossings {
-        trial: Vec::with_capacity(n),
-        channel: Vec::with_capacity(n),
-        frame: Vec::with_capacity(n),
-    };
-    for p in parts.into_iter().flatten() {
-        all.trial.extend(p.trial);
-        all.channel.extend(p.channel);
-        all.frame.extend(p.frame);
-    }
-    Ok(all)
+    Ok(Crossings::concat(parts.into_iter().flatten().collect()))
 }
 
 /// [`zero_velocity_crossings_ragged`] of the velocity of `positions`: each trial's velocity is
@@ -338,11 +351,7 @@ pub fn zero_velocity_crossings_of_positions(
     min_change: f64,
 ) -> Result<Crossings> {
     let bounds = crate::gradient::check_corpus(times, positions, channels, offsets)?;
-    if !(min_change.is_finite() && min_change >= 0.0) {
-        return Err(Error::InvalidArgument(format!(
-            "min_change must be a finite number >= 0, got {min_change}"
-        )));
-    }
+    check_min_change(min_change)?;
     let parts: Vec<Result<Crossings>> = bounds
         .par_chunks(TRIALS_PER_TASK)
         .enumerate()
@@ -392,14 +401,7 @@ pub fn zero_velocity_crossings_of_positions(
             Ok(out)
         })
         .collect();
-    let mut all = Crossings::default();
-    for p in parts {
-        let p = p?;
-        all.trial.extend(p.trial);
-        all.channel.extend(p.channel);
-        all.frame.extend(p.frame);
-    }
-    Ok(all)
+    Ok(Crossings::concat(parts.into_iter().collect::<Result<_>>()?))
 }
 
 #[cfg(test)]
