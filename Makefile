@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 export VIRTUAL_ENV := $(abspath $(VENV))
 
-.PHONY: install demo test bench lint docs format clean
+.PHONY: install demo test bench bench-against lint docs format clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -23,6 +23,10 @@ test: install   ## cargo test + pytest
 bench: install  ## criterion benches + visprim vs numpy/scipy/scikit-learn in one run
 	cargo bench --bench signal --bench linalg
 	$(PY) benches/compare.py
+
+bench-against: install  ## make bench-against REV=<commit>: that commit's kernels against these, same runs
+	@test -n "$(REV)" || { echo "usage: make bench-against REV=<commit>"; exit 2; }
+	$(PY) benches/against.py $(REV)
 
 lint: install   ## ruff, mypy (config in pyproject.toml), cargo fmt --check, clippy
 	$(VENV)/bin/ruff check python tests benches
