@@ -6,86 +6,37 @@
 //! copy. Value checks (offsets, NaN/inf, band) live in the kernel and come back as
 //! `ValueError`.
 
-use std::borrow::Cow;
-
 use numpy::ndarray::Array2;
-use numpy::{
-    IntoPyArray, PyArray2, PyArrayDescrMethods, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn,
-    PyUntypedArray, PyUntypedArrayMethods,
-};
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use numpy::{IntoPyArray, PyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
+use super::arrays::{check_dtype, f64_values, i64_values, ndarray, shape_str, F64Array};
 use crate::dtw::{self, DtwOptions};
 
 /// A read-only `(frames, dim)` float64 argument.
-struct Frames<'py> {
-    arr: PyReadonlyArrayDyn<'py, f64>,
-    dim: usize,
-}
-
-impl Frames<'_> {
-    fn values(&self) -> Cow<'_, [f64]> {
-        let view = self.arr.as_array();
-        match view.to_slice() {
-            Some(s) => Cow::Borrowed(s),
-            None => Cow::Owned(view.iter().copied().collect()),
-        }
-    }
-}
-
-fn ndarray<'a, 'py>(
-    obj: &'a Bound<'py, PyAny>,
-    name: &str,
-    what: &str,
-) -> PyResult<&'a Bound<'py, PyUntypedArray>> {
-    obj.cast::<PyUntypedArray>().map_err(|_| {
-        let ty = obj
-            .get_type()
-            .name()
-            .map(|n| n.to_string())
-            .unwrap_or_else(|_| "?".into());
-        PyTypeError::new_err(format!(
-            "{name} must be a numpy.ndarray of {what}, got {ty}"
-        ))
-    })
-}
-
-fn frames<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Frames<'py>> {
+fn frames<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<F64Array<'py>> {
     let arr = ndarray(obj, name, "float64")?;
-    if !arr.dtype().is_equiv_to(&numpy::dtype::<f64>(obj.py())) {
-        return Err(PyTypeError::new_err(format!(
-            "{name} must have dtype float64, got {}; convert it with .astype(numpy.float64)",
-            arr.dtype()
-        )));
-    }
+    check_dtype::<f64>(arr, name, "float64")?;
     if arr.ndim() != 2 {
         return Err(PyValueError::new_err(format!(
-            "{name} must be 2-D (frames, channels), got shape {:?}",
-            arr.shape()
+            "{name} must be 2-D (frames, channels), got shape {}",
+            shape_str(arr.shape())
         )));
     }
-    let dim = arr.shape()[1];
-    let arr = arr.cast::<PyArrayDyn<f64>>()?.readonly();
-    Ok(Frames { arr, dim })
+    f64_values(arr)
 }
 
 fn offsets(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i64>> {
     let arr = ndarray(obj, name, "int64")?;
-    if !arr.dtype().is_equiv_to(&numpy::dtype::<i64>(obj.py())) {
-        return Err(PyTypeError::new_err(format!(
-            "{name} must have dtype int64, got {}; convert it with .astype(numpy.int64)",
-            arr.dtype()
-        )));
-    }
+    check_dtype::<i64>(arr, name, "int64")?;
     if arr.ndim() != 1 {
         return Err(PyValueError::new_err(format!(
-            "{name} must be 1-D (the first frame of each sequence), got shape {:?}",
-            arr.shape()
+            "{name} must be 1-D (the first frame of each sequence), got shape {}",
+            shape_str(arr.shape())
         )));
     }
-    let arr = arr.cast::<PyArrayDyn<i64>>()?.readonly();
-    Ok(arr.as_array().iter().copied().collect())
+    i64_values(arr, name)
 }
 
 /// Run `f` in a local pool of `n_threads` threads (`None`: rayon's global pool).
@@ -128,7 +79,7 @@ fn dtw_distances<'py>(
     let qo = offsets(query_offsets, "query_offsets")?;
     let qv = q.values();
     let qv: &[f64] = &qv;
-    let dim = q.dim;
+    let dim = q.shape[1];
     let (rows, cols, out) = match (references, reference_offsets) {
         (None, None) => {
             let n = qo.len();
@@ -138,10 +89,10 @@ fn dtw_distances<'py>(
         }
         (Some(r), Some(ro)) => {
             let r = frames(r, "references")?;
-            if r.dim != dim {
+            if r.shape[1] != dim {
                 return Err(PyValueError::new_err(format!(
                     "references have {} channels but queries have {dim}",
-                    r.dim
+                    r.shape[1]
                 )));
             }
             let ro = offsets(ro, "reference_offsets")?;

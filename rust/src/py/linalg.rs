@@ -10,14 +10,14 @@ use std::borrow::Cow;
 
 use numpy::ndarray::Array2;
 use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyArrayDescrMethods, PyArrayDyn, PyArrayMethods,
-    PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods,
+    IntoPyArray, PyArray1, PyArray2, PyArrayDescrMethods, PyUntypedArray, PyUntypedArrayMethods,
 };
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
 use super::args::{n_threads_arg, opt_usize_in, Int, Real};
+use super::arrays::{check_dtype, f64_values, ndarray_or, shape_str, F64Array};
 use crate::buffer::try_copy;
 use crate::covariance::Moments;
 use crate::kmeans::{self as km, KMeansParams};
@@ -32,7 +32,7 @@ type LabelsArray<'py> = Bound<'py, PyArray1<i64>>;
 
 /// A read-only 2-D float64 array argument.
 struct Matrix<'py> {
-    arr: PyReadonlyArrayDyn<'py, f64>,
+    array: F64Array<'py>,
     rows: usize,
     cols: usize,
 }
@@ -40,11 +40,7 @@ struct Matrix<'py> {
 impl Matrix<'_> {
     /// Row-major values: borrowed when the array is C-contiguous, copied otherwise.
     fn values(&self) -> Cow<'_, [f64]> {
-        let view = self.arr.as_array();
-        match view.to_slice() {
-            Some(s) => Cow::Borrowed(s),
-            None => Cow::Owned(view.iter().copied().collect()),
-        }
+        self.array.values()
     }
 }
 
@@ -62,32 +58,20 @@ fn real_as_f64<'py>(obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
 
 /// `obj` as a 2-D float64 numpy array; `what` describes the expected content.
 fn matrix<'py>(obj: &Bound<'py, PyAny>, name: &str, what: &str) -> PyResult<Matrix<'py>> {
-    let arr = obj.cast::<PyUntypedArray>().map_err(|_| {
-        let ty = obj
-            .get_type()
-            .name()
-            .map(|n| n.to_string())
-            .unwrap_or_else(|_| "?".into());
-        PyTypeError::new_err(format!(
-            "{name} must be a 2-D numpy.ndarray of float64 ({what}), got {ty}"
-        ))
+    let arr = ndarray_or(obj, |ty| {
+        format!("{name} must be a 2-D numpy.ndarray of float64 ({what}), got {ty}")
     })?;
-    if !arr.dtype().is_equiv_to(&numpy::dtype::<f64>(obj.py())) {
-        return Err(PyTypeError::new_err(format!(
-            "{name} must have dtype float64, got {}; convert it with .astype(numpy.float64)",
-            arr.dtype()
-        )));
-    }
+    check_dtype::<f64>(arr, name, "float64")?;
     if arr.ndim() != 2 {
         return Err(PyValueError::new_err(format!(
-            "{name} must be 2-D ({what}), got {} dimension(s) with shape {:?}",
+            "{name} must be 2-D ({what}), got {} dimension(s) with shape {}",
             arr.ndim(),
-            arr.shape()
+            shape_str(arr.shape())
         )));
     }
     let (rows, cols) = (arr.shape()[0], arr.shape()[1]);
-    let arr = arr.cast::<PyArrayDyn<f64>>()?.readonly();
-    Ok(Matrix { arr, rows, cols })
+    let array = f64_values(arr)?;
+    Ok(Matrix { array, rows, cols })
 }
 
 /// Run `f` in a local pool of `n_threads` threads (`None`: rayon's global pool).

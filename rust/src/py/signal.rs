@@ -6,77 +6,20 @@
 //! returns numpy arrays that take ownership of the kernel's buffers (no copy). Value checks
 //! (NaN/inf, ranges, lengths) live in the kernels and come back as `ValueError`.
 
-use std::borrow::Cow;
-
 use numpy::ndarray::{Array2, ArrayD, IxDyn};
-use numpy::{
-    IntoPyArray, PyArray1, PyArray2, PyArrayDescrMethods, PyArrayDyn, PyArrayMethods,
-    PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods,
-};
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use numpy::{IntoPyArray, PyArray1, PyArray2, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 use super::args::{opt_usize_in, Int, Real};
+use super::arrays::{check_dtype, f64_values, i64_values, ndarray, shape_str, F64Array};
 use crate::filter::{self, Sos};
 use crate::{clock, gradient, resample, seg1, zvc};
 
-/// A read-only float64 array argument, with its name for messages.
-struct F64Arg<'py> {
-    arr: PyReadonlyArrayDyn<'py, f64>,
-    shape: Vec<usize>,
-}
-
-impl F64Arg<'_> {
-    /// The values in C (row-major) order: borrowed when the array is C-contiguous, else copied.
-    fn values(&self) -> Cow<'_, [f64]> {
-        let view = self.arr.as_array();
-        match view.to_slice() {
-            Some(s) => Cow::Borrowed(s),
-            None => Cow::Owned(view.iter().copied().collect()),
-        }
-    }
-}
-
-fn shape_str(shape: &[usize]) -> String {
-    match shape {
-        [n] => format!("({n},)"),
-        _ => format!(
-            "({})",
-            shape
-                .iter()
-                .map(|d| d.to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    }
-}
-
-fn as_ndarray<'a, 'py>(
-    obj: &'a Bound<'py, PyAny>,
-    name: &str,
-    what: &str,
-) -> PyResult<&'a Bound<'py, PyUntypedArray>> {
-    obj.cast::<PyUntypedArray>().map_err(|_| {
-        let ty = obj
-            .get_type()
-            .name()
-            .map(|n| n.to_string())
-            .unwrap_or_else(|_| "?".into());
-        PyTypeError::new_err(format!(
-            "{name} must be a numpy.ndarray of {what}, got {ty}"
-        ))
-    })
-}
-
 /// `obj` as a float64 array with one of the allowed numbers of dimensions.
-fn f64_arg<'py>(obj: &Bound<'py, PyAny>, name: &str, ndims: &[usize]) -> PyResult<F64Arg<'py>> {
-    let arr = as_ndarray(obj, name, "float64")?;
-    if !arr.dtype().is_equiv_to(&numpy::dtype::<f64>(obj.py())) {
-        return Err(PyTypeError::new_err(format!(
-            "{name} must have dtype float64, got {}; convert it with .astype(numpy.float64)",
-            arr.dtype()
-        )));
-    }
+fn f64_arg<'py>(obj: &Bound<'py, PyAny>, name: &str, ndims: &[usize]) -> PyResult<F64Array<'py>> {
+    let arr = ndarray(obj, name, "float64")?;
+    check_dtype::<f64>(arr, name, "float64")?;
     if !ndims.contains(&arr.ndim()) {
         let want = ndims
             .iter()
@@ -88,53 +31,31 @@ fn f64_arg<'py>(obj: &Bound<'py, PyAny>, name: &str, ndims: &[usize]) -> PyResul
             shape_str(arr.shape())
         )));
     }
-    let shape = arr.shape().to_vec();
-    let arr = arr.cast::<PyArrayDyn<f64>>()?.readonly();
-    Ok(F64Arg { arr, shape })
+    f64_values(arr)
+}
+
+/// A 1-D int64 array argument, copied to a vector; `detail` says what it holds (for the
+/// message of a wrong number of dimensions).
+fn i64_arg(obj: &Bound<'_, PyAny>, name: &str, detail: &str) -> PyResult<Vec<i64>> {
+    let arr = ndarray(obj, name, "int64")?;
+    check_dtype::<i64>(arr, name, "int64")?;
+    if arr.ndim() != 1 {
+        return Err(PyValueError::new_err(format!(
+            "{name} must be 1-D{detail}, got shape {}",
+            shape_str(arr.shape())
+        )));
+    }
+    i64_values(arr, name)
 }
 
 /// `offsets` as a 1-D int64 array, copied to a vector.
 fn offsets_arg(obj: &Bound<'_, PyAny>) -> PyResult<Vec<i64>> {
-    let arr = as_ndarray(obj, "offsets", "int64")?;
-    if !arr.dtype().is_equiv_to(&numpy::dtype::<i64>(obj.py())) {
-        return Err(PyTypeError::new_err(format!(
-            "offsets must have dtype int64, got {}; convert it with .astype(numpy.int64)",
-            arr.dtype()
-        )));
-    }
-    if arr.ndim() != 1 {
-        return Err(PyValueError::new_err(format!(
-            "offsets must be 1-D (the first frame of each trial), got shape {}",
-            shape_str(arr.shape())
-        )));
-    }
-    copy_i64(&arr.cast::<PyArrayDyn<i64>>()?.readonly(), "offsets")
-}
-
-/// The values of an int64 array, copied (one memory copy when contiguous).
-fn copy_i64(arr: &numpy::PyReadonlyArrayDyn<'_, i64>, name: &str) -> PyResult<Vec<i64>> {
-    match arr.as_slice() {
-        Ok(values) => Ok(crate::buffer::try_copy(values, name)?),
-        Err(_) => Ok(arr.as_array().iter().copied().collect()),
-    }
+    i64_arg(obj, "offsets", " (the first frame of each trial)")
 }
 
 /// A 1-D int64 array argument, copied to a vector.
 fn i64_vec(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<i64>> {
-    let arr = as_ndarray(obj, name, "int64")?;
-    if !arr.dtype().is_equiv_to(&numpy::dtype::<i64>(obj.py())) {
-        return Err(PyTypeError::new_err(format!(
-            "{name} must have dtype int64, got {}; convert it with .astype(numpy.int64)",
-            arr.dtype()
-        )));
-    }
-    if arr.ndim() != 1 {
-        return Err(PyValueError::new_err(format!(
-            "{name} must be 1-D, got shape {}",
-            shape_str(arr.shape())
-        )));
-    }
-    copy_i64(&arr.cast::<PyArrayDyn<i64>>()?.readonly(), name)
+    i64_arg(obj, name, "")
 }
 
 /// `sos` as a list of sections.
@@ -260,7 +181,7 @@ fn sosfiltfilt_ragged<'py>(
 fn positions_arg<'py>(
     positions: Option<&Bound<'py, PyAny>>,
     shape: &[usize],
-) -> PyResult<Option<F64Arg<'py>>> {
+) -> PyResult<Option<F64Array<'py>>> {
     let Some(p) = positions else { return Ok(None) };
     let p = f64_arg(p, "positions", &[1, 2])?;
     if p.shape != shape {
@@ -430,6 +351,31 @@ fn seg1_events<'py>(
     ))
 }
 
+/// A kernel of [`clock`]: `(times, offsets, trial, query) -> values`.
+type ClockConversion = fn(&[f64], &[i64], &[i64], &[f64]) -> crate::Result<Vec<f64>>;
+
+/// A clock conversion of the ragged corpus's `times` (`offsets`) at the queries `(trial, q)`;
+/// `query` is the query array with its argument name.
+fn clock_map<'py>(
+    py: Python<'py>,
+    times: &Bound<'py, PyAny>,
+    offsets: &Bound<'py, PyAny>,
+    trial: &Bound<'py, PyAny>,
+    query: (&Bound<'py, PyAny>, &str),
+    convert: ClockConversion,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let times = f64_arg(times, "times", &[1])?;
+    let offsets = offsets_arg(offsets)?;
+    let trial = i64_vec(trial, "trial")?;
+    let q = f64_arg(query.0, query.1, &[1])?;
+    let tv = times.values();
+    let tv: &[f64] = &tv;
+    let qv = q.values();
+    let qv: &[f64] = &qv;
+    let out = py.detach(|| convert(tv, &offsets, &trial, qv))?;
+    Ok(out.into_pyarray(py))
+}
+
 /// Fractional frames (relative to each trial's first frame) of times `t` (seconds) of trials
 /// `trial`, by linear interpolation of the ragged corpus's `times`, clamped to the trial.
 #[pyfunction]
@@ -440,16 +386,7 @@ fn times_to_frames<'py>(
     trial: &Bound<'py, PyAny>,
     t: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let times = f64_arg(times, "times", &[1])?;
-    let offsets = offsets_arg(offsets)?;
-    let trial = i64_vec(trial, "trial")?;
-    let q = f64_arg(t, "t", &[1])?;
-    let tv = times.values();
-    let tv: &[f64] = &tv;
-    let qv = q.values();
-    let qv: &[f64] = &qv;
-    let out = py.detach(|| clock::times_to_frames(tv, &offsets, &trial, qv))?;
-    Ok(out.into_pyarray(py))
+    clock_map(py, times, offsets, trial, (t, "t"), clock::times_to_frames)
 }
 
 /// Seconds of fractional frames `frame` (relative to each trial's first frame) of trials
@@ -462,16 +399,14 @@ fn frames_to_times<'py>(
     trial: &Bound<'py, PyAny>,
     frame: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let times = f64_arg(times, "times", &[1])?;
-    let offsets = offsets_arg(offsets)?;
-    let trial = i64_vec(trial, "trial")?;
-    let f = f64_arg(frame, "frame", &[1])?;
-    let tv = times.values();
-    let tv: &[f64] = &tv;
-    let fv = f.values();
-    let fv: &[f64] = &fv;
-    let out = py.detach(|| clock::frames_to_times(tv, &offsets, &trial, fv))?;
-    Ok(out.into_pyarray(py))
+    clock_map(
+        py,
+        times,
+        offsets,
+        trial,
+        (frame, "frame"),
+        clock::frames_to_times,
+    )
 }
 
 /// Each segment `[starts[i], ends[i]]` (fractional frames) of `values` `(frames, channels)`
