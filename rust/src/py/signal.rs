@@ -48,6 +48,26 @@ fn i64_arg(obj: &Bound<'_, PyAny>, name: &str, detail: &str) -> PyResult<Vec<i64
     i64_values(arr, name)
 }
 
+/// `times` `(frames,)` and the float64 `(frames, channels)` (1-D: one channel) array `values`
+/// named `name`, with their number of channels; the frame counts must match.
+fn timed_frames<'py>(
+    times: &Bound<'py, PyAny>,
+    values: &Bound<'py, PyAny>,
+    name: &str,
+) -> PyResult<(F64Array<'py>, F64Array<'py>, usize)> {
+    let t = f64_arg(times, "times", &[1])?;
+    let v = f64_arg(values, name, &[1, 2])?;
+    let (frames, channels) = frames_channels(&v.shape);
+    if t.shape[0] != frames {
+        return Err(PyValueError::new_err(format!(
+            "times must have shape ({frames},) to match {name} {}, got {}",
+            shape_str(&v.shape),
+            shape_str(&t.shape)
+        )));
+    }
+    Ok((t, v, channels))
+}
+
 /// `offsets` as a 1-D int64 array, copied to a vector.
 fn offsets_arg(obj: &Bound<'_, PyAny>) -> PyResult<Vec<i64>> {
     i64_arg(obj, "offsets", " (the first frame of each trial)")
@@ -265,18 +285,9 @@ fn zero_velocity_crossings_of_positions<'py>(
     offsets: &Bound<'py, PyAny>,
     min_change: Real,
 ) -> PyResult<Crossings3<'py>> {
-    let t = f64_arg(times, "times", &[1])?;
-    let p = f64_arg(positions, "positions", &[1, 2])?;
+    let (t, p, channels) = timed_frames(times, positions, "positions")?;
     let offsets = offsets_arg(offsets)?;
     let min_change = min_change_arg(min_change)?;
-    let (frames, channels) = frames_channels(&p.shape);
-    if t.shape[0] != frames {
-        return Err(PyValueError::new_err(format!(
-            "times must have shape ({frames},) to match positions {}, got {}",
-            shape_str(&p.shape),
-            shape_str(&t.shape)
-        )));
-    }
     let tv = t.values();
     let tv: &[f64] = &tv;
     let pv = p.values();
@@ -300,17 +311,8 @@ fn gradient_ragged<'py>(
     values: &Bound<'py, PyAny>,
     offsets: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-    let t = f64_arg(times, "times", &[1])?;
-    let v = f64_arg(values, "values", &[1, 2])?;
+    let (t, v, channels) = timed_frames(times, values, "values")?;
     let offsets = offsets_arg(offsets)?;
-    let (frames, channels) = frames_channels(&v.shape);
-    if t.shape[0] != frames {
-        return Err(PyValueError::new_err(format!(
-            "times must have shape ({frames},) to match values {}, got {}",
-            shape_str(&v.shape),
-            shape_str(&t.shape)
-        )));
-    }
     let tv = t.values();
     let tv: &[f64] = &tv;
     let data = v.values();
