@@ -9,7 +9,7 @@
 
 use rayon::prelude::*;
 
-use crate::{Error, Result};
+use crate::{buffer, Error, Result};
 
 /// Events of a corpus, sorted by trial then time.
 #[derive(Debug, Default, Clone, PartialEq)]
@@ -143,10 +143,11 @@ pub fn seg1_events(trial: &[i64], channel: &[i64], time: &[f64], window: f64) ->
         })
         .collect();
     let n: usize = parts.iter().map(|p| p.trial.len()).sum();
+    let what = "the SEG-1 events";
     let mut all = Events {
-        trial: Vec::with_capacity(n),
-        time: Vec::with_capacity(n),
-        n_channels: Vec::with_capacity(n),
+        trial: buffer::try_with_capacity(n, what)?,
+        time: buffer::try_with_capacity(n, what)?,
+        n_channels: buffer::try_with_capacity(n, what)?,
     };
     for p in parts {
         all.trial.extend(p.trial);

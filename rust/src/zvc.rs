@@ -22,7 +22,7 @@ use rayon::prelude::*;
 
 use crate::checks::first_non_finite;
 use crate::ragged::trial_bounds;
-use crate::{Error, Result};
+use crate::{buffer, Error, Result};
 
 /// Crossings of a ragged corpus, sorted by trial, then channel, then frame.
 #[derive(Debug, Default, Clone, PartialEq)]
@@ -37,19 +37,22 @@ pub struct Crossings {
 
 impl Crossings {
     /// The crossings of `parts`, one after the other.
-    fn concat(parts: Vec<Crossings>) -> Self {
+    ///
+    /// Errors: the joined arrays cannot be allocated (Memory).
+    fn concat(parts: Vec<Crossings>) -> Result<Self> {
         let n: usize = parts.iter().map(|p| p.frame.len()).sum();
+        let what = "the zero-velocity crossings";
         let mut all = Crossings {
-            trial: Vec::with_capacity(n),
-            channel: Vec::with_capacity(n),
-            frame: Vec::with_capacity(n),
+            trial: buffer::try_with_capacity(n, what)?,
+            channel: buffer::try_with_capacity(n, what)?,
+            frame: buffer::try_with_capacity(n, what)?,
         };
         for p in parts {
             all.trial.extend(p.trial);
             all.channel.extend(p.channel);
             all.frame.extend(p.frame);
         }
-        all
+        Ok(all)
     }
 }
 
@@ -335,7 +338,7 @@ pub fn zero_velocity_crossings_ragged(
     if parts.iter().any(Option::is_none) {
         return Err(non_finite_error(velocity, positions, channels));
     }
-    Ok(Crossings::concat(parts.into_iter().flatten().collect()))
+    Crossings::concat(parts.into_iter().flatten().collect())
 }
 
 /// [`zero_velocity_crossings_ragged`] of the velocity of `positions`: each trial's velocity is
@@ -401,7 +404,7 @@ pub fn zero_velocity_crossings_of_positions(
             Ok(out)
         })
         .collect();
-    Ok(Crossings::concat(parts.into_iter().collect::<Result<_>>()?))
+    Crossings::concat(parts.into_iter().collect::<Result<_>>()?)
 }
 
 #[cfg(test)]
