@@ -32,7 +32,9 @@ def main() -> int:
     parser.add_argument("--quick", action="store_true", help="small workloads (smoke test)")
     parser.add_argument("--only", choices=SECTIONS, nargs="*", help="sections to run")
     args = parser.parse_args()
-    print(f"BLAS: {blas_info()}")
+    from visprim.kernels import instruction_set
+
+    print(f"BLAS: {blas_info()}; visprim kernels: {instruction_set()}")
     table = Table()
     for name in args.only or SECTIONS:
         try:

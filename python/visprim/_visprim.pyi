@@ -5,6 +5,8 @@ from typing import final
 import numpy as np
 from numpy.typing import NDArray
 
+def instruction_set() -> str: ...
+
 # --- signal kernels (filter, zvc, resample) ---
 
 def butter_sos(order: int, cutoff: float) -> NDArray[np.float64]: ...

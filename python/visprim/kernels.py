@@ -75,6 +75,17 @@ def _index(x: ArrayLike, name: str = "offsets") -> Any:
 _offsets = _index
 
 
+def instruction_set() -> str:
+    """The widest SIMD instruction set the kernels use on this CPU, chosen at run time.
+
+    Returns:
+        ``"avx512f"`` (the covariance, filter and distance kernels use 512-bit vectors),
+        ``"avx2+fma"`` or ``"portable"`` (plain Rust). Results agree to rounding; the
+        covariance is bit-identical between ``"avx2+fma"`` and ``"avx512f"``.
+    """
+    return _visprim.instruction_set()
+
+
 def butter_sos(order: int, cutoff: float) -> _F64:
     """Low-pass Butterworth filter as second-order sections.
 
