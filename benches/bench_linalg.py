@@ -8,6 +8,10 @@ which does the same work), and k-means on ``100,000 x 30`` float64 rows for k in
 Each k-means run uses the next seed, and the mean inertia over 16 seeds (the timed runs and a
 few more) is printed for both, so that speed is compared at equal clustering quality.
 
+The covariance's rate is printed beside the rate of a square ``numpy`` matrix product (OpenBLAS
+DGEMM, every core) measured in the same run: the practical peak of the machine's floating-point
+units, against which a kernel's efficiency is read (it doubles with AVX-512).
+
 Run through ``benches/compare.py`` (``make bench``); ``--quick`` shrinks every workload.
 """
 
@@ -48,8 +52,17 @@ def _seeded(fit: Callable[[int], float]) -> tuple[Callable[[], None], list[float
     return run, inertias
 
 
+def dgemm_rate(quick: bool) -> float:
+    """GFLOP/s of a square float64 ``numpy`` matrix product (median of 3 runs)."""
+    m = 500 if quick else 3000
+    rng = np.random.default_rng(1)
+    a, b = rng.standard_normal((m, m)), rng.standard_normal((m, m))
+    return 2 * m**3 / median_time(lambda: a @ b, repeat=3) / 1e9
+
+
 def bench_covariance_eigh(table: Table, quick: bool) -> None:
     n, d = (10_000, 100) if quick else (100_000, 400)
+    peak = dgemm_rate(quick)
     rng = np.random.default_rng(0)
     x = rng.standard_normal((n, d)) + rng.uniform(-1, 1, d)
     workload = f"covariance+eigh {n}x{d}"
@@ -72,7 +85,14 @@ def bench_covariance_eigh(table: Table, quick: bool) -> None:
     t_np = median_time(numpy_ref, repeat=repeat)
     t_sk = median_time(sklearn_ref, repeat=repeat)
     flops = n * d * d  # nominal: the lower half of XᵀX is n·d²/2 multiply-adds
-    table.add(workload, "visprim covariance + eigh", t_ours, f"{flops / t_ours / 1e9:.1f} GFLOP/s")
+    rate = flops / t_ours / 1e9
+    table.add(
+        workload,
+        "visprim covariance + eigh",
+        t_ours,
+        f"{rate:.1f} GFLOP/s",
+        f"{rate / peak:.0%} of numpy DGEMM's {peak:.0f} GFLOP/s ({K.instruction_set()})",
+    )
     table.add(workload, "numpy cov + eigh", t_np, f"{flops / t_np / 1e9:.1f} GFLOP/s")
     table.add(workload, "sklearn PCA covariance_eigh", t_sk, f"{flops / t_sk / 1e9:.1f} GFLOP/s")
     table.ratio(workload, "numpy cov + eigh", t_np, t_ours)
