@@ -81,6 +81,13 @@ def bench_covariance_eigh(table: Table, quick: bool) -> None:
     def sklearn_ref() -> Any:
         return PCA(svd_solver="covariance_eigh").fit(x)
 
+    # Same numbers first (whichever tile this CPU runs): covariance and eigenvalues.
+    _, c_ours = K.covariance(x)
+    c_ref = np.cov(x, rowvar=False, bias=True)
+    err = float(np.abs(c_ours - c_ref).max() / np.abs(c_ref).max())
+    assert err < 1e-12, f"covariance differs from numpy by {err:.1e} (relative)"
+    w_ours, w_ref = K.eigh(c_ours)[0], np.linalg.eigvalsh(c_ref)[::-1]
+    assert np.allclose(w_ours, w_ref, rtol=0, atol=1e-12 * w_ref[0]), "eigenvalues differ"
     t_ours = median_time(ours, repeat=repeat)
     t_np = median_time(numpy_ref, repeat=repeat)
     t_sk = median_time(sklearn_ref, repeat=repeat)
