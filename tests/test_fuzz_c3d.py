@@ -253,8 +253,10 @@ def test_not_c3d_and_empty(tmp_path: Path) -> None:
         read(empty)
 
 
+@pytest.mark.filterwarnings("error::RuntimeWarning")
 def test_coinciding_markers_are_a_read_error(tmp_path: Path) -> None:
-    """Elbow and wrist on the same marker: no forearm direction (was a TrialError)."""
+    """Elbow and wrist on the same marker: no forearm direction (was a TrialError), and no
+    numpy warning before the error."""
     path = write_arm_c3d(tmp_path / "same.c3d")
     mapping = {"acromion": "RSHO", "elbow": "RELB", "wrist": "RELB"}
     with pytest.raises(ReadError, match=r"same\.c3d"):

@@ -154,7 +154,9 @@ def extend_hand(
     hand_axis`` (``hand_axis`` (T, 3) unit vectors: the hand's long axis, e.g. the hand
     joint's rotation applied to the forearm's rest direction)."""
     length = np.linalg.norm(wrist - elbow, axis=-1, keepdims=True)
-    axis = hand_axis / np.linalg.norm(hand_axis, axis=-1, keepdims=True)
+    # A zero axis (coinciding markers) gives NaN, which the readers refuse with the file's name.
+    with np.errstate(invalid="ignore", divide="ignore"):
+        axis = hand_axis / np.linalg.norm(hand_axis, axis=-1, keepdims=True)
     return wrist + ratio * length * axis
 
 
