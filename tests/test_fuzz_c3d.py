@@ -268,3 +268,15 @@ def test_absurd_rates_are_refused(tmp_path: Path, rate: float) -> None:
     path = write_arm_c3d(tmp_path / "rate.c3d", rate=rate)
     with pytest.raises(MalformedFileError, match=r"rate\.c3d: POINT:RATE gives a frame period"):
         read(path)
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+def test_signalling_nan_coordinates_read_without_a_numpy_warning(tmp_path: Path) -> None:
+    """A float coordinate holding a signalling NaN is a missing value like any NaN; widening
+    it to float64 must not raise numpy's 'invalid value encountered in cast'."""
+    path = write_arm_c3d(tmp_path / "snan.c3d")
+    b = bytearray(path.read_bytes())
+    data_start = 512 * (1 + 1 + b[512 + 2])
+    b[data_start : data_start + 4] = (0x7F800001).to_bytes(4, "little")  # frame 0, point 0, x
+    path.write_bytes(bytes(b))
+    _read_or_refuse(path)

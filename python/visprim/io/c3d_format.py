@@ -342,7 +342,9 @@ def _points(
     else:
         flat = np.frombuffer(raw, dtype=r.end + "i2")
     table = flat.reshape(n_frames, frame_values)[:, : 4 * n_points].reshape(n_frames, n_points, 4)
-    xyz = table[:, :, :3].astype(np.float64)
+    # (A signalling NaN in float data widens to a quiet NaN: a missing value like any other.)
+    with np.errstate(invalid="ignore"):
+        xyz = table[:, :, :3].astype(np.float64)
     if not is_float:
         xyz *= scale
     if is_float:
