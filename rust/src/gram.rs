@@ -22,7 +22,7 @@
 use crate::buffer;
 use crate::Result;
 
-/// Rows per packed block: the two packings (`2 · KC · dp` values, ≈ 430 KiB for d = 400)
+/// Rows per packed block: the two packings (`2 · KC · dp` values, 408–432 KiB for d = 400)
 /// stay in L2.
 const KC: usize = 64;
 
