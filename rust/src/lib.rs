@@ -31,17 +31,11 @@ pub use error::{Error, Result};
 /// The widest SIMD instruction set the kernels use on this CPU, chosen at run time:
 /// `"avx512f"`, `"avx2+fma"` or `"portable"` (plain Rust, any CPU).
 pub fn instruction_set() -> &'static str {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            return "avx512f";
-        }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            return "avx2+fma";
-        }
+    match sqdist::detected_level() {
+        sqdist::Level::Avx512 => "avx512f",
+        sqdist::Level::Avx2 => "avx2+fma",
+        sqdist::Level::Scalar => "portable",
     }
-    "portable"
 }
 
 #[cfg(feature = "python")]
