@@ -58,8 +58,9 @@ impl Kernel {
     /// Panics if [`available`] is false.
     pub(crate) fn detect() -> Self {
         assert!(available(), "the Gram kernel needs AVX2 and FMA");
+        // The level the distance kernels detect (and `instruction_set` reports).
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
+        if crate::sqdist::detected_level() == crate::sqdist::Level::Avx512 {
             return Self::AVX512;
         }
         Self::AVX2
