@@ -81,7 +81,8 @@ def visprim_pipeline(times, angles, offsets):
         times,
         filtered,
         offsets,
-        "seg1",
+        method="seg1",
+        tuning="repetitions",
         min_change_deg=MIN_CHANGE_DEG,
         seg1_adaptive=SEG1_ADAPTIVE,
     )
@@ -320,7 +321,13 @@ def stage_timings(times, angles, offsets) -> list[tuple[str, str, float]]:
         "ZVC+SEG-1",
         "visprim",
         lambda: segment_concatenated(
-            times, f1, offsets, "seg1", min_change_deg=MIN_CHANGE_DEG, seg1_adaptive=SEG1_ADAPTIVE
+            times,
+            f1,
+            offsets,
+            method="seg1",
+            tuning="repetitions",
+            min_change_deg=MIN_CHANGE_DEG,
+            seg1_adaptive=SEG1_ADAPTIVE,
         ),
     )
     timed(

@@ -10,7 +10,6 @@ import pytest
 from visprim.datasets import imitation_experiment
 from visprim.io.corpus import GeneratedCorpus, sample_items
 from visprim.model import PrimitiveModel
-from visprim.preprocess import prepare_corpus
 from visprim.scale import TrialList, fit_streaming, tune_threshold
 from visprim.segment.seg2 import speed_squared_concatenated, tune_seg2_threshold_concatenated
 
@@ -115,7 +114,8 @@ def test_seg2_is_tuned_on_the_in_memory_fits_sample(trials):
     """With more trials than the tuning limit, the streamed sample is the one the in-memory
     tuning subsets (checked with a small limit; the paper's tuning from repetitions)."""
     model = PrimitiveModel.paper(**PARAMS)
-    prepared = prepare_corpus(trials, seg2_threshold=1.0)
+    prepared = model.set_params(seg2_threshold=1.0).prepare(trials)
+    model.set_params(seg2_threshold=None)
     z = speed_squared_concatenated(prepared.times_all, prepared.angles_all, prepared.offsets)
     reps = np.array([t.repetitions for t in trials])
     for limit in (5, 17, len(trials), 1000):

@@ -247,11 +247,11 @@ def test_segment_corpus_errors() -> None:
     with pytest.raises(ValueError, match="method"):
         S.segment_corpus(times, angles, "seg3")  # type: ignore[arg-type]
     with pytest.raises(ValueError, match="equal length"):
-        S.segment_corpus(times, angles[:1])
+        S.segment_corpus(times, angles[:1], "seg2")
     with pytest.raises(ValueError, match="threshold"):
-        S.segment_corpus(times, angles, threshold=-1.0)
+        S.segment_corpus(times, angles, "seg2", threshold=-1.0)
     with pytest.raises(ValueError, match="repetitions"):
-        S.segment_corpus(times, angles, repetitions=[1, 0])
+        S.segment_corpus(times, angles, "seg2", repetitions=[1, 0])
 
 
 # --- scores ---------------------------------------------------------------------------------

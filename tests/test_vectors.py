@@ -220,8 +220,10 @@ def test_mean_offsets_keep_shape_apart_and_add_back_exactly():
     times, angles = _trial(rng, 80)
     angles[:, 0] += 4 * TWO_PI  # whole turns are part of the mean too
     frames = np.array([[3.0, 40.5], [20.0, 79.0]])
-    args = dict(trial=[0, 0], starts=[0.0, 0.0], ends=[1.0, 1.0], n_samples=25)
-    absolute = vectors_from_frames(angles, frames[:, 0], frames[:, 1], **args)
+    args = dict(
+        trial=[0, 0], starts=[0.0, 0.0], ends=[1.0, 1.0], n_samples=25, periodic_channels=(0, 2)
+    )
+    absolute = vectors_from_frames(angles, frames[:, 0], frames[:, 1], offsets="turns", **args)
     shape = vectors_from_frames(angles, frames[:, 0], frames[:, 1], offsets="mean", **args)
     curves = to_curves(shape.vectors, 4)
     np.testing.assert_allclose(curves.mean(axis=1), 0.0, atol=1e-12)

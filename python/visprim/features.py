@@ -29,10 +29,11 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from visprim import params
 from visprim.arm import ANGLE_NAMES, BODY_TO_SHOULDER, shoulder_rotation
 
 Features = Literal["zyz", "directions"]
-FEATURES: tuple[str, ...] = ("zyz", "directions")
+FEATURES = params.FEATURES
 
 _PER_ARM = {"zyz": 4, "directions": 6}
 _DIRECTION_NAMES = ("upper_x", "upper_y", "upper_z", "fore_x", "fore_y", "fore_z")

@@ -38,13 +38,12 @@ from sklearn.exceptions import NotFittedError
 from visprim import kernels
 from visprim.accuracy import DEFAULT_F_VALUES, DEFAULT_K_VALUES, ErrorTables, compute_error_tables
 from visprim.clustering import kmeans_projections
-from visprim.features import FEATURES, n_channels, periodic_channels, to_angles
+from visprim.features import n_channels, periodic_channels, to_angles
+from visprim.params import PAPER, check_params, defaults
 from visprim.pca import PCABasis, fit_pca
 from visprim.preprocess import PreparedCorpus, prepare_corpus
-from visprim.segment.seg2 import TUNINGS
 from visprim.trial import Trial
 from visprim.vectors import (
-    OFFSETS,
     SegmentVectors,
     amplitude_gains,
     stretch,
@@ -55,6 +54,8 @@ from visprim.vectors import (
 Source = Literal["projection", "cluster"]
 
 __all__ = ["PrimitiveModel", "rebuild_from_centers"]
+
+_DEFAULTS = defaults()
 
 
 class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
@@ -177,24 +178,24 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
     def __init__(
         self,
         *,
-        filter_order: int = 10,
-        cutoff: float = 0.25,
-        segmentation: str = "seg2",
-        zvc_threshold_deg: float = 5.0,
-        window: float = 0.3,
-        seg1_adaptive: bool = True,
-        seg2_threshold: float | None = None,
-        seg2_tuning: str = "robust",
-        features: str = "directions",
-        offsets: str = "mean",
-        amplitude: bool = False,
-        n_samples: int = 100,
-        n_components: int = 30,
-        n_clusters: int = 30,
-        n_init: int = 10,
-        max_iter: int = 300,
-        tol: float = 1e-4,
-        seed: int = 0,
+        filter_order: int = _DEFAULTS["filter_order"],
+        cutoff: float = _DEFAULTS["cutoff"],
+        segmentation: str = _DEFAULTS["segmentation"],
+        zvc_threshold_deg: float = _DEFAULTS["zvc_threshold_deg"],
+        window: float = _DEFAULTS["window"],
+        seg1_adaptive: bool = _DEFAULTS["seg1_adaptive"],
+        seg2_threshold: float | None = _DEFAULTS["seg2_threshold"],
+        seg2_tuning: str = _DEFAULTS["seg2_tuning"],
+        features: str = _DEFAULTS["features"],
+        offsets: str = _DEFAULTS["offsets"],
+        amplitude: bool = _DEFAULTS["amplitude"],
+        n_samples: int = _DEFAULTS["n_samples"],
+        n_components: int = _DEFAULTS["n_components"],
+        n_clusters: int = _DEFAULTS["n_clusters"],
+        n_init: int = _DEFAULTS["n_init"],
+        max_iter: int = _DEFAULTS["max_iter"],
+        tol: float = _DEFAULTS["tol"],
+        seed: int = _DEFAULTS["seed"],
     ) -> None:
         self.filter_order = filter_order
         self.cutoff = cutoff
@@ -217,54 +218,21 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
 
     # ------------------------------------------------------------------ validation
 
-    def _validate_params(self) -> None:  # noqa: C901 (a flat list of checks)
-        def bad(name: str, why: str) -> ValueError:
-            return ValueError(f"PrimitiveModel parameter {name}={getattr(self, name)!r}: {why}")
-
-        def is_int(v: Any) -> bool:
-            return isinstance(v, (int, np.integer)) and not isinstance(v, bool)
-
-        if not is_int(self.filter_order) or self.filter_order < 1:
-            raise bad("filter_order", "must be an integer >= 1")
-        if not isinstance(self.cutoff, (int, float)) or not 0.0 < float(self.cutoff) < 1.0:
-            raise bad("cutoff", "must be a number in (0, 1) (fraction of Nyquist)")
-        if self.segmentation not in ("seg1", "seg2"):
-            raise bad("segmentation", "must be 'seg1' or 'seg2'")
-        if not np.isfinite(self.zvc_threshold_deg) or self.zvc_threshold_deg < 0:
-            raise bad("zvc_threshold_deg", "must be a finite number of degrees >= 0")
-        if not np.isfinite(self.window) or self.window <= 0:
-            raise bad("window", "must be a positive number of seconds")
-        if self.seg2_threshold is not None and not (
-            np.isfinite(self.seg2_threshold) and self.seg2_threshold > 0
-        ):
-            raise bad("seg2_threshold", "must be None (tune it) or a positive number (rad/s)^2")
-        if not isinstance(self.seg1_adaptive, (bool, np.bool_)):
-            raise bad("seg1_adaptive", "must be True or False")
-        if self.seg2_tuning not in TUNINGS:
-            raise bad("seg2_tuning", f"must be one of {list(TUNINGS)}")
-        if self.features not in FEATURES:
-            raise bad("features", f"must be one of {list(FEATURES)}")
-        if self.offsets not in OFFSETS:
-            raise bad("offsets", f"must be one of {list(OFFSETS)}")
-        if not isinstance(self.amplitude, (bool, np.bool_)):
-            raise bad("amplitude", "must be True or False")
+    def _validate_params(self) -> None:
+        """Check every parameter against its declared constraint (:mod:`visprim.params`),
+        then the combinations."""
+        check_params(self.get_params())
         if self.amplitude and self.offsets != "mean":
-            raise bad("amplitude", "scales posture-relative shapes: needs offsets='mean'")
-        if not is_int(self.n_samples) or self.n_samples < 2:
-            raise bad("n_samples", "must be an integer >= 2")
+            raise ValueError(
+                f"PrimitiveModel parameter amplitude={self.amplitude!r}: scales "
+                "posture-relative shapes: needs offsets='mean'"
+            )
         d = n_channels(self.features) * int(self.n_samples)
-        if not is_int(self.n_components) or not 1 <= self.n_components <= d:
-            raise bad("n_components", f"must be an integer in [1, channels * n_samples = {d}]")
-        if not is_int(self.n_clusters) or self.n_clusters < 1:
-            raise bad("n_clusters", "must be an integer >= 1")
-        if not is_int(self.n_init) or self.n_init < 1:
-            raise bad("n_init", "must be an integer >= 1")
-        if not is_int(self.max_iter) or self.max_iter < 1:
-            raise bad("max_iter", "must be an integer >= 1")
-        if not np.isfinite(self.tol) or self.tol < 0:
-            raise bad("tol", "must be a finite number >= 0")
-        if not is_int(self.seed) or self.seed < 0:
-            raise bad("seed", "must be an integer >= 0")
+        if not 1 <= self.n_components <= d:
+            raise ValueError(
+                f"PrimitiveModel parameter n_components={self.n_components!r}: must be an "
+                f"integer in [1, channels * n_samples = {d}]"
+            )
 
     @classmethod
     def paper(cls, **params: Any) -> PrimitiveModel:
@@ -272,14 +240,8 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         absolute segment vectors (``offsets="turns"``), SEG-2's constant tuned from the
         repetitions (``seg2_tuning="repetitions"``), SEG-1's fixed window
         (``seg1_adaptive=False``); other parameters as given (their defaults are the
-        paper's)."""
-        paper = {
-            "features": "zyz",
-            "offsets": "turns",
-            "seg2_tuning": "repetitions",
-            "seg1_adaptive": False,
-        }
-        return cls(**{**paper, **params})
+        paper's). The preset is declared in :data:`visprim.params.PAPER`."""
+        return cls(**{**PAPER, **params})
 
     def _check_fitted(self) -> None:
         if not hasattr(self, "cluster_centers_"):

@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 from visprim.features import from_angles
 from visprim.filtering import butterworth, default_padlen, lowpass_concatenated
 from visprim.ik import arm_angles_corpus
+from visprim.params import SHORT_POLICY
 from visprim.segment import CorpusSegmentation, segment_concatenated
 from visprim.trial import Trial
 
@@ -95,15 +96,15 @@ class PreparedCorpus:
 def prepare_corpus(
     trials: Sequence[Trial],
     *,
-    filter_order: int = 10,
-    cutoff: float = 0.25,
-    segmentation: str = "seg2",
-    zvc_threshold_deg: float = 5.0,
-    window: float = 0.3,
-    seg2_threshold: float | None = None,
-    seg2_tuning: str = "repetitions",
-    features: str = "zyz",
-    seg1_adaptive: bool = False,
+    filter_order: int,
+    cutoff: float,
+    segmentation: str,
+    zvc_threshold_deg: float,
+    window: float,
+    seg2_threshold: float | None,
+    seg2_tuning: str,
+    features: str,
+    seg1_adaptive: bool,
 ) -> PreparedCorpus:
     """IK, zero-phase low-pass and segmentation of ``trials`` (see the module docstring).
 
@@ -130,14 +131,14 @@ def prepare_corpus(
             pad,
         )
     filtered = lowpass_concatenated(
-        raw, offsets, order=filter_order, cutoff=cutoff, names=names, short="reduce"
+        raw, offsets, order=filter_order, cutoff=cutoff, names=names, short=SHORT_POLICY
     )
     values = from_angles(filtered, features)
     seg = segment_concatenated(
         times,
         values,
         offsets,
-        segmentation,  # type: ignore[arg-type]
+        method=segmentation,  # type: ignore[arg-type]
         repetitions=np.array([t.repetitions for t in trials], dtype=np.int64),
         threshold=seg2_threshold,
         tuning=seg2_tuning,

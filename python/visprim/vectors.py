@@ -61,15 +61,15 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from visprim import kernels
+from visprim import kernels, params
 
 #: Samples per degree of freedom (the paper's choice).
-DEFAULT_N_SAMPLES = 100
+DEFAULT_N_SAMPLES: int = params.BY_NAME["n_samples"].default
 
 #: What a segment vector is taken relative to (module docstring): ``"turns"``, the absolute
 #: curves with whole turns of the periodic channels removed (the paper), or ``"mean"``, each
 #: channel relative to its mean over the segment.
-OFFSETS: tuple[str, ...] = ("turns", "mean")
+OFFSETS = params.OFFSETS
 
 #: Channels of the arm's angles (γ, β, α, elbow) that are angles about an unbounded axis,
 #: unwrapped in time by the IK: γ (0) and α (2). Their segments are brought to the branch
@@ -219,9 +219,9 @@ def vectors_from_frames(
     trial: ArrayLike,
     starts: ArrayLike,
     ends: ArrayLike,
-    n_samples: int = DEFAULT_N_SAMPLES,
-    periodic_channels: Sequence[int] = PERIODIC_CHANNELS,
-    offsets: str = "turns",
+    n_samples: int,
+    periodic_channels: Sequence[int],
+    offsets: str,
 ) -> SegmentVectors:
     """Segment vectors of a concatenated corpus from fractional frame limits (one kernel call).
 
@@ -241,7 +241,8 @@ def vectors_from_frames(
         docstring); ``()`` keeps every channel as it is.
     offsets : {"turns", "mean"}
         What is kept apart per segment (:data:`OFFSETS`): whole turns of the periodic
-        channels (default, the paper), or every channel's mean over the segment.
+        channels (the paper), or every channel's mean over the segment (the model's
+        default, :mod:`visprim.params`).
     """
     if offsets not in OFFSETS:
         raise ValueError(f"offsets must be one of {list(OFFSETS)}, got {offsets!r}")
@@ -376,6 +377,7 @@ def corpus_vectors(
         ends=np.concatenate(seg_ends),
         n_samples=int(n_samples),
         periodic_channels=periodic_channels,
+        offsets="turns",
     )
 
 

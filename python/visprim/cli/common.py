@@ -28,12 +28,13 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from visprim.params import SHORT_POLICIES, SHORT_POLICY, STUDY_FRAME_PERIOD_S
 from visprim.trial import EACH_ARM, Trial
 
 log = logging.getLogger(__name__)
 
 #: Frame period (s) recordings are resampled to by default: the original study's 34 ms.
-DEFAULT_RESAMPLE_S = 0.034
+DEFAULT_RESAMPLE_S = STUDY_FRAME_PERIOD_S
 #: Accepted range of ``--resample`` (s): 0.1 ms to 10 s.
 RESAMPLE_RANGE_S = (1e-4, 10.0)
 #: ``--on-gap`` choices (those of :data:`visprim.io.gaps.ON_GAP`; a test keeps them equal).
@@ -133,7 +134,7 @@ def load_source(source: dict[str, Any], lowpass: tuple[int, float] | None = None
             dict(source.get("options") or {}),
             on_error="warn",
         )
-        mode = str(source.get("short", "reduce"))
+        mode = str(source.get("short", SHORT_POLICY))
         return trials if lowpass is None else drop_short(trials, lowpass, mode)
     raise CLIError(f"unknown data source {source!r} recorded in the model; give DATA instead")
 
@@ -204,7 +205,7 @@ def trials_and_source(
         options = reader_options(args, allow_each=True)
         on_error = "raise" if getattr(args, "strict", False) else "warn"
         trials = read_files(data, resample, options, on_error=on_error)
-        short = str(getattr(args, "short", "reduce"))
+        short = str(getattr(args, "short", SHORT_POLICY))
         if lowpass is not None:
             trials = drop_short(trials, lowpass, short)
         paths = [str(Path(p).resolve()) for p in data]
@@ -303,8 +304,8 @@ def add_reader_options(p: argparse.ArgumentParser, *, many: bool = True) -> None
         return
     g.add_argument(
         "--short",
-        choices=("reduce", "drop", "error"),
-        default="reduce",
+        choices=SHORT_POLICIES,
+        default=SHORT_POLICY,
         help="recordings with no more frames than the low-pass filter's padding: filter them "
         "with less padding (default), leave them out with a warning, or stop with an error",
     )
@@ -371,7 +372,7 @@ def drop_short(trials: list[Trial], lowpass: tuple[int, float], mode: str) -> li
     """``--short``: trials with no more frames than the padding of the ``lowpass`` (order,
     cutoff) filter are kept (``"reduce"``: the model filters them with less padding), left
     out with a warning (``"drop"``) or refused (``"error"``)."""
-    if mode == "reduce":
+    if mode == SHORT_POLICY:
         return trials
     from visprim.filtering import butterworth, default_padlen
 
@@ -405,111 +406,107 @@ def drop_short(trials: list[Trial], lowpass: tuple[int, float], mode: str) -> li
 # ---------------------------------------------------------------------------- model
 
 
+def _model_option_type(param: Any) -> Callable[[str], Any]:
+    """``type=`` of a model option: the declared constraint, in the option's unit."""
+    convert = int if isinstance(param.default, int) else float
+    words = param.constraint.words.removeprefix("must be ")
+    unit = f" {param.option_unit}" if param.option_unit else ""
+    what = (
+        f"a positive number{unit}"
+        if param.option_scale != 1.0
+        else words.removeprefix("None (tune it) or ")
+    )
+    return _typed(convert, lambda v: param.constraint.accepts(param.from_option(v)), what)
+
+
 def add_model_options(p: argparse.ArgumentParser) -> None:
+    """The options of every :class:`~visprim.model.PrimitiveModel` parameter that has one,
+    built from :data:`visprim.params.PARAMETERS`. An option not given is not set
+    (``argparse.SUPPRESS``), so :func:`model_from_args` passes on only what the user gave
+    and the model's (or the paper's) defaults apply to the rest."""
+    from visprim.params import PARAMETERS
+
     g = p.add_argument_group("model parameters (visprim.PrimitiveModel)")
-    g.add_argument(
-        "--segmentation",
-        choices=("seg2", "seg1"),
-        default="seg2",
-        help="segmentation of the training movements (default seg2)",
-    )
-    g.add_argument(
-        "--filter-order", type=positive_int, default=10, help="Butterworth order (default 10)"
-    )
-    g.add_argument(
-        "--cutoff",
-        type=fraction,
-        default=0.25,
-        help="normalised low-pass cutoff, fraction of Nyquist (default 0.25)",
-    )
-    g.add_argument(
-        "--zvc-threshold",
-        type=nonneg_float,
-        default=5.0,
-        help="ZVC significant-movement threshold, degrees (default 5)",
-    )
-    g.add_argument(
-        "--window", type=positive_float, default=0.3, help="SEG-1 window, s (default 0.3)"
-    )
-    g.add_argument(
-        "--features",
-        choices=("directions", "zyz"),
-        default=None,
-        help="what segments are made of: bone directions (default) or the paper's Z-Y-Z angles",
-    )
-    g.add_argument(
-        "--seg2-tuning",
-        choices=("robust", "repetitions"),
-        default=None,
-        help="how SEG-2's c is tuned: to the corpus' speed (default) or the paper's rule "
-        "from the repetitions",
-    )
+    for param in PARAMETERS:
+        if param.option is None:
+            continue
+        default = param.to_option(param.default)
+        shown = (
+            "tuned on the data"
+            if default is None
+            else f"{default:g}"
+            if not isinstance(default, str)
+            else default
+        )
+        if isinstance(param.default, bool):
+            shown = "on" if param.default else "off"
+        paper = ""
+        if param.fixed_by_paper:
+            value = param.paper
+            paper = f"; --paper: {('on' if value else 'off') if isinstance(value, bool) else value}"
+        help_text = f"{param.help} (default {shown}{paper})"
+        kwargs: dict[str, Any] = {"dest": param.dest, "default": argparse.SUPPRESS}
+        if param.choices is not None:
+            kwargs["choices"] = param.choices
+        elif isinstance(param.default, bool):
+            kwargs["action"] = argparse.BooleanOptionalAction
+        else:
+            kwargs["type"] = _model_option_type(param)
+        g.add_argument(param.option, help=help_text, **kwargs)
     g.add_argument(
         "--paper",
         action="store_true",
-        help="the paper's exact method (Z-Y-Z angles, c from repetitions, fixed SEG-1 "
-        "window) unless --features / --seg2-tuning say otherwise",
+        default=argparse.SUPPRESS,
+        help="the paper's exact method ("
+        + ", ".join(f"{n}={v!r}" for n, v in _paper_preset().items())
+        + ") unless the options above say otherwise",
     )
-    g.add_argument(
-        "--seg2-threshold",
-        type=positive_float,
-        default=None,
-        help="SEG-2 constant c, (rad/s)^2 (default: tuned on the data)",
-    )
-    g.add_argument(
-        "--samples", type=positive_int, default=100, help="samples per angle (default 100)"
-    )
-    g.add_argument(
-        "--components", type=positive_int, default=30, help="eigenvectors f (default 30)"
-    )
-    g.add_argument("--clusters", type=positive_int, default=30, help="primitives k (default 30)")
-    g.add_argument("--n-init", type=positive_int, default=10, help="k-means restarts (default 10)")
-    g.add_argument("--seed", type=seed_int, default=0, help="k-means seed (default 0)")
+
+
+def _paper_preset() -> dict[str, Any]:
+    from visprim.params import PAPER
+
+    return dict(PAPER)
+
+
+def _model_options() -> dict[str, str]:
+    from visprim.params import PARAMETERS
+
+    return {p.name: p.option for p in PARAMETERS if p.option is not None}
 
 
 #: PrimitiveModel parameter -> the command-line option that sets it.
-MODEL_OPTIONS = {
-    "segmentation": "--segmentation",
-    "filter_order": "--filter-order",
-    "cutoff": "--cutoff",
-    "zvc_threshold_deg": "--zvc-threshold",
-    "window": "--window",
-    "seg2_threshold": "--seg2-threshold",
-    "n_samples": "--samples",
-    "n_components": "--components",
-    "n_clusters": "--clusters",
-    "n_init": "--n-init",
-    "seed": "--seed",
-}
+MODEL_OPTIONS: dict[str, str] = _model_options()
+
+
+def model_params_from_args(args: argparse.Namespace) -> dict[str, Any]:
+    """The model parameters the user gave as options, in the API's units."""
+    from visprim.params import PARAMETERS
+
+    given = vars(args)
+    return {
+        p.name: p.from_option(given[p.dest])
+        for p in PARAMETERS
+        if p.dest is not None and p.dest in given
+    }
 
 
 def model_from_args(args: argparse.Namespace, **overrides: Any) -> Any:
+    """The model the options describe: :meth:`PrimitiveModel.paper` with ``--paper`` (or a
+    command whose preset is the paper's, as ``demo``), else ``PrimitiveModel()``, with the
+    options the user gave and ``overrides``."""
     from visprim.model import PrimitiveModel
 
+    params = {**model_params_from_args(args), **overrides}
     paper = bool(getattr(args, "paper", False))
-    params = dict(
-        features=getattr(args, "features", None) or ("zyz" if paper else "directions"),
-        seg2_tuning=getattr(args, "seg2_tuning", None) or ("repetitions" if paper else "robust"),
-        seg1_adaptive=not paper,
-        segmentation=args.segmentation,
-        filter_order=args.filter_order,
-        cutoff=args.cutoff,
-        zvc_threshold_deg=args.zvc_threshold,
-        window=args.window,
-        seg2_threshold=args.seg2_threshold,
-        n_samples=args.samples,
-        n_components=args.components,
-        n_clusters=args.clusters,
-        n_init=args.n_init,
-        seed=args.seed,
-    )
-    params.update(overrides)
-    model = PrimitiveModel(**params)
-    if params["n_components"] > model.dim:
+    model = PrimitiveModel.paper(**params) if paper else PrimitiveModel(**params)
+    if model.n_components > model.dim:
         raise UsageError(
-            f"--components {params['n_components']} exceeds the segment vector dimension "
+            f"--components {model.n_components} exceeds the segment vector dimension "
             f"{model.dim} (channels x --samples); lower --components"
         )
+    if model.amplitude and model.offsets != "mean":
+        raise UsageError("--amplitude scales posture-relative shapes: it needs --offsets mean")
     return model
 
 

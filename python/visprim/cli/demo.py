@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import logging
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -56,12 +57,9 @@ def run(args: argparse.Namespace) -> int:
         say("\nSegmentation against the true stroke boundaries (±100 ms):")
         say(format_segmentation_scores(scores))
 
-        models = {}
+        models: dict[str, Any] = {}
         tables = {}
-        for method in ("seg1", "seg2"):
-            st.step(f"learning with {common.label(method)}")
-            model = common.model_from_args(args, segmentation=method)
-            model.fit(trials, source=source)
+        for method, model in paper_models(args, trials, source, st.step):
             models[method] = model
             name = f"model_{method}.npz"
             save_model(model, tmp / name)
@@ -111,6 +109,22 @@ def run(args: argparse.Namespace) -> int:
         print(f"Primitives on the simulated humanoid: {', '.join(str(g) for g in gifs)}")
     print(f"Done in {elapsed:.1f} s.")
     return 0
+
+
+def paper_models(
+    args: argparse.Namespace,
+    trials: list[Any],
+    source: Any,
+    step: Any = None,
+) -> Iterator[tuple[str, Any]]:
+    """``(method, fitted model)`` for SEG-1, then SEG-2: the models the demo learns from
+    ``trials`` with the options ``args`` (the paper's preset unless they say otherwise);
+    ``step(text)`` is told before each fit."""
+    for method in ("seg1", "seg2"):
+        if step is not None:
+            step(f"learning with {common.label(method)}")
+        model = common.model_from_args(args, segmentation=method)
+        yield method, model.fit(trials, source=source)
 
 
 def _demo_sim(model: Any, out_dir: Path, args: argparse.Namespace) -> list[Path]:

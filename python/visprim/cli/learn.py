@@ -25,9 +25,7 @@ def run(args: argparse.Namespace) -> int:
     model = common.model_from_args(args)
     with stages(3, "learn") as st:
         st.step("reading data")
-        trials, source = common.trials_and_source(
-            args, args.resample, (args.filter_order, args.cutoff)
-        )
+        trials, source = common.trials_and_source(args, args.resample, common.model_lowpass(model))
         log.debug("learning from %d trials", len(trials))
         st.step(f"fitting {len(trials)} trials")
         try:
@@ -48,7 +46,7 @@ def _with_fix(message: str) -> str:
     message = message.removeprefix("fit: ")
     if "short='reduce'" in message:  # the filter's advice, in command-line terms
         head = message.split("; drop them")[0]
-        return f"{head}; leave them out with --short drop (the default)"
+        return f"{head}; leave them out with --short drop"
     if "n_clusters=" in message:
         return message.replace("lower n_clusters", "lower --clusters")
     if "segment" in message and "found" in message:

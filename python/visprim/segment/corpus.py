@@ -17,6 +17,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from visprim import params
 from visprim.segment.clock import times_to_frames
 from visprim.segment.seg1 import DEFAULT_WINDOW, seg1_from_crossings
 from visprim.segment.seg2 import (
@@ -97,17 +98,17 @@ def segment_concatenated(
     times: ArrayLike,
     angles: ArrayLike,
     offsets: ArrayLike,
-    method: Method = "seg2",
     *,
+    method: Method,
+    tuning: str,
+    seg1_adaptive: bool,
     repetitions: ArrayLike | int = 1,
     threshold: float | None = None,
-    tuning: str = "repetitions",
     coverage: float = 1.0,
     min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
     window: float = DEFAULT_WINDOW,
     min_change_deg: float = DEFAULT_MIN_CHANGE_DEG,
     min_dofs: int = 2,
-    seg1_adaptive: bool = True,
 ) -> CorpusSegmentation:
     """Segment every trial of a concatenated corpus.
 
@@ -116,6 +117,9 @@ def segment_concatenated(
     times : (N,) seconds; angles : (N, C) radians (normally low-passed);
     offsets : (n_trials,) first frame of each trial.
     method : "seg1" or "seg2"
+    tuning, seg1_adaptive
+        The method's choices (below), required: their defaults are
+        :class:`~visprim.model.PrimitiveModel`'s (:mod:`visprim.params`).
     repetitions : int or (n_trials,) ints
         SEG-2 only: repetitions of each trial, for tuning the global threshold.
     threshold : float, optional
@@ -201,8 +205,10 @@ def segment_concatenated(
 def segment_corpus(
     times_list: Sequence[ArrayLike],
     angles_list: Sequence[ArrayLike],
-    method: Method = "seg2",
+    method: Method,
     *,
+    tuning: str = params.PAPER["seg2_tuning"],
+    seg1_adaptive: bool = params.PAPER["seg1_adaptive"],
     repetitions: Sequence[int] | int = 1,
     threshold: float | None = None,
     coverage: float = 1.0,
@@ -212,7 +218,8 @@ def segment_corpus(
     min_dofs: int = 2,
 ) -> CorpusSegmentation:
     """:func:`segment_concatenated` on lists of per-trial times (T_i,) s and angles
-    (T_i, C) rad (concatenated here once)."""
+    (T_i, C) rad (concatenated here once), with the paper's choices unless ``tuning`` and
+    ``seg1_adaptive`` say otherwise (:data:`visprim.params.PAPER`)."""
     if len(times_list) != len(angles_list) or len(times_list) == 0:
         raise ValueError("times_list and angles_list must be non-empty and of equal length")
     lengths = np.array([np.shape(a)[0] for a in angles_list], dtype=np.int64)
@@ -221,7 +228,9 @@ def segment_corpus(
         np.concatenate([np.asarray(t, dtype=np.float64) for t in times_list]),
         np.concatenate([np.asarray(a, dtype=np.float64) for a in angles_list]),
         offsets,
-        method,
+        method=method,
+        tuning=tuning,
+        seg1_adaptive=seg1_adaptive,
         repetitions=np.asarray(repetitions, dtype=np.int64),
         threshold=threshold,
         coverage=coverage,

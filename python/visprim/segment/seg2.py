@@ -73,6 +73,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from visprim import params
 from visprim.segment.velocity import velocity_concatenated
 
 __all__ = [
@@ -105,7 +106,7 @@ _ROBUST_QUANTILE = 0.95
 #: Robust tuning: the arm is at rest (onset / offset) below this fraction of c_i.
 ROBUST_REST: float = 1.0 / 25.0
 #: Names of the threshold tunings (:func:`tune_seg2_threshold_concatenated`).
-TUNINGS: tuple[str, ...] = ("repetitions", "robust")
+TUNINGS = params.TUNINGS
 
 
 def speed_squared_concatenated(

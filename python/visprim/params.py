@@ -1,0 +1,366 @@
+"""The settings of the method, declared once: :class:`~visprim.model.PrimitiveModel`'s
+parameters, the paper's preset, the study's frame period and the short-trial policy.
+
+Each parameter of :data:`PARAMETERS` carries its default, its constraint (the allowed
+values, as scikit-learn's ``_parameter_constraints``), a one-line description with its
+unit, the command-line option that sets it (with the option's unit when it is not the
+API's) and the value the paper's preset fixes, if it fixes one. Everything else reads
+this table:
+
+- ``PrimitiveModel.__init__``'s defaults (a test checks they are these), its
+  ``_validate_params`` (:func:`check_params`) and ``PrimitiveModel.paper()``
+  (:data:`PAPER`);
+- the command-line model options (:func:`visprim.cli.common.add_model_options`,
+  ``MODEL_OPTIONS``, ``model_from_args``) and ``visprim demo``'s preset.
+
+Units: the API works in seconds and radians (``zvc_threshold_deg`` is the one parameter in
+degrees); the command line prints and reads degrees, so ``--seg2-threshold`` takes
+(deg/s)², converted here (:meth:`Parameter.from_option`).
+
+This module imports nothing heavy (it is read when the command line builds its parser).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+__all__ = [
+    "DEG2_PER_RAD2",
+    "FEATURES",
+    "OFFSETS",
+    "PAPER",
+    "PARAMETERS",
+    "SEGMENTATIONS",
+    "SHORT_POLICIES",
+    "SHORT_POLICY",
+    "STUDY_FRAME_PERIOD_S",
+    "TUNINGS",
+    "Parameter",
+    "check_params",
+    "defaults",
+]
+
+#: The original study's frame period, seconds (FastTrak sensors read every 34 ms). The
+#: generated experiment samples at it and recordings are resampled to it by default, so
+#: that the cutoff, SEG-1's window and SEG-2's constant mean what they meant in the study.
+STUDY_FRAME_PERIOD_S: float = 0.034
+
+#: What ``learn`` does with recordings that have no more frames than the low-pass filter's
+#: padding: filter them with less padding ("reduce"), leave them out with a warning
+#: ("drop") or stop ("error").
+SHORT_POLICIES: tuple[str, ...] = ("reduce", "drop", "error")
+#: The default of :data:`SHORT_POLICIES` (the model's own behaviour: pad them less).
+SHORT_POLICY: Literal["reduce"] = "reduce"
+
+#: (deg/s)² per (rad/s)²: SEG-2's constant is printed and given on the command line in
+#: (deg/s)² and held in (rad/s)² by the API.
+DEG2_PER_RAD2: float = math.degrees(1.0) ** 2
+
+#: Segmentation methods (:mod:`visprim.segment`).
+SEGMENTATIONS: tuple[str, ...] = ("seg2", "seg1")
+#: Channel descriptions (:mod:`visprim.features`).
+FEATURES: tuple[str, ...] = ("zyz", "directions")
+#: What a segment vector is taken relative to (:mod:`visprim.vectors`).
+OFFSETS: tuple[str, ...] = ("turns", "mean")
+#: How SEG-2's constant is tuned (:mod:`visprim.segment.seg2`).
+TUNINGS: tuple[str, ...] = ("repetitions", "robust")
+
+
+# ---------------------------------------------------------------------------- constraints
+
+
+def _is_int(v: Any) -> bool:
+    import numbers
+
+    return isinstance(v, numbers.Integral) and not isinstance(v, bool)
+
+
+def _is_real(v: Any) -> bool:
+    import numbers
+
+    return isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(float(v))
+
+
+def _is_bool(v: Any) -> bool:
+    return isinstance(v, bool) or type(v).__name__ == "bool_"
+
+
+@dataclass(frozen=True)
+class Constraint:
+    """Allowed values of a parameter: ``accepts(value)`` and the words of the error."""
+
+    accepts: Callable[[Any], bool]
+    words: str
+
+
+def integer(low: int) -> Constraint:
+    return Constraint(lambda v: _is_int(v) and v >= low, f"must be an integer >= {low}")
+
+
+def real(
+    low: float, high: float = math.inf, *, open_low: bool, unit: str = "", words: str = ""
+) -> Constraint:
+    def ok(v: Any) -> bool:
+        if not _is_real(v):
+            return False
+        x = float(v)
+        return (x > low if open_low else x >= low) and x < high
+
+    unit = f" {unit}" if unit else ""
+    if words:
+        return Constraint(ok, words)
+    if high < math.inf:
+        return Constraint(ok, f"must be a number in ({low:g}, {high:g}){unit}")
+    return Constraint(ok, f"must be a finite number {'>' if open_low else '>='} {low:g}{unit}")
+
+
+def options(values: tuple[str, ...]) -> Constraint:
+    return Constraint(
+        lambda v: isinstance(v, str) and v in values, f"must be one of {list(values)}"
+    )
+
+
+BOOLEAN = Constraint(_is_bool, "must be True or False")
+
+
+def optional(c: Constraint, none_means: str) -> Constraint:
+    return Constraint(
+        lambda v: v is None or c.accepts(v),
+        f"must be None ({none_means}) or {c.words.removeprefix('must be ')}",
+    )
+
+
+# ---------------------------------------------------------------------------- parameters
+
+#: The paper's preset leaves a parameter as given (its default is already the paper's).
+_FREE = object()
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One parameter of :class:`~visprim.model.PrimitiveModel`.
+
+    Attributes
+    ----------
+    name : the constructor argument.
+    default : its default value.
+    constraint : the allowed values.
+    doc : what it is, with its unit (one line).
+    option : the command-line option that sets it (None: not on the command line).
+    help : the option's help (its default and the paper's value are added).
+    paper : the value the paper's preset fixes (see :attr:`fixed_by_paper`).
+    option_scale : option value = API value x ``option_scale`` (unit conversion).
+    option_unit : the option's unit when it is not the API's.
+    """
+
+    name: str
+    default: Any
+    constraint: Constraint
+    doc: str
+    option: str | None
+    help: str = ""
+    paper: Any = _FREE
+    option_scale: float = 1.0
+    option_unit: str = ""
+    choices: tuple[str, ...] | None = field(default=None)
+
+    @property
+    def fixed_by_paper(self) -> bool:
+        """Whether :meth:`PrimitiveModel.paper` fixes this parameter."""
+        return self.paper is not _FREE
+
+    @property
+    def dest(self) -> str | None:
+        """The ``argparse`` attribute of the option."""
+        return None if self.option is None else self.option.lstrip("-").replace("-", "_")
+
+    def from_option(self, value: Any) -> Any:
+        """The API value of a value given to :attr:`option` (in the option's unit)."""
+        if value is None or self.option_scale == 1.0:
+            return value
+        return float(value) / self.option_scale
+
+    def to_option(self, value: Any) -> Any:
+        """``value`` (API unit) in the option's unit, to print it."""
+        if value is None or self.option_scale == 1.0:
+            return value
+        return float(value) * self.option_scale
+
+    def check(self, value: Any) -> str | None:
+        """None if ``value`` is allowed, else the reason."""
+        return None if self.constraint.accepts(value) else self.constraint.words
+
+
+_P = Parameter
+#: Every parameter of :class:`~visprim.model.PrimitiveModel`, in the constructor's order.
+PARAMETERS: tuple[Parameter, ...] = (
+    _P(
+        "filter_order",
+        10,
+        integer(1),
+        "Butterworth order of the zero-phase low-pass",
+        "--filter-order",
+        "Butterworth order",
+    ),
+    _P(
+        "cutoff",
+        0.25,
+        real(
+            0.0,
+            1.0,
+            open_low=True,
+            words="must be a number between 0 and 1 (exclusive), a fraction of Nyquist",
+        ),
+        "normalised cutoff of the low-pass, a fraction of the Nyquist frequency, in (0, 1)",
+        "--cutoff",
+        "normalised low-pass cutoff, fraction of Nyquist",
+    ),
+    _P(
+        "segmentation",
+        "seg2",
+        options(SEGMENTATIONS),
+        "which segmentation produces the training segments",
+        "--segmentation",
+        "segmentation of the training movements",
+        choices=SEGMENTATIONS,
+    ),
+    _P(
+        "zvc_threshold_deg",
+        5.0,
+        real(0.0, open_low=False, unit="(degrees)"),
+        "significant-movement threshold of the zero-velocity crossings, degrees (SEG-1)",
+        "--zvc-threshold",
+        "ZVC significant-movement threshold, degrees",
+    ),
+    _P(
+        "window",
+        0.3,
+        real(0.0, open_low=True, unit="(seconds)"),
+        "SEG-1 window, seconds",
+        "--window",
+        "SEG-1 window, s",
+    ),
+    _P(
+        "seg1_adaptive",
+        True,
+        BOOLEAN,
+        "SEG-1 cuts fast cyclic motion at its half-cycles with a shorter window",
+        "--seg1-adaptive",
+        "SEG-1 cuts fast cyclic motion at its half-cycles (--no-seg1-adaptive: the "
+        "paper's fixed window)",
+        paper=False,
+    ),
+    _P(
+        "seg2_threshold",
+        None,
+        optional(real(0.0, open_low=True, unit="(rad/s)^2"), "tune it"),
+        "SEG-2 constant c on the summed squared channel velocity, (rad/s)^2; None tunes it",
+        "--seg2-threshold",
+        "SEG-2 constant c, (deg/s)^2 as learn prints it",
+        option_scale=DEG2_PER_RAD2,
+        option_unit="(deg/s)^2",
+    ),
+    _P(
+        "seg2_tuning",
+        "robust",
+        options(TUNINGS),
+        "how an unset SEG-2 constant is tuned: to the corpus' speed, or the paper's rule "
+        "from the repetitions",
+        "--seg2-tuning",
+        "how SEG-2's c is tuned: to the corpus' speed or the paper's rule from the repetitions",
+        paper="repetitions",
+        choices=("robust", "repetitions"),
+    ),
+    _P(
+        "features",
+        "directions",
+        options(FEATURES),
+        "what segments are made of: unit bone directions or Z-Y-Z Euler angles and elbow",
+        "--features",
+        "what segments are made of: bone directions or the paper's Z-Y-Z angles",
+        paper="zyz",
+        choices=("directions", "zyz"),
+    ),
+    _P(
+        "offsets",
+        "mean",
+        options(OFFSETS),
+        "what each segment vector is relative to: its channels' mean, or absolute up to "
+        "whole turns",
+        "--offsets",
+        "segment vectors relative to each segment's mean posture, or absolute up to whole "
+        "turns (the paper)",
+        paper="turns",
+        choices=("mean", "turns"),
+    ),
+    _P(
+        "amplitude",
+        False,
+        BOOLEAN,
+        "rebuild a segment from its primitive scaled by a least-squares gain (needs "
+        "offsets='mean')",
+        "--amplitude",
+        "rebuild each segment from its primitive scaled by a least-squares gain",
+    ),
+    _P(
+        "n_samples",
+        100,
+        integer(2),
+        "samples per channel in a segment vector",
+        "--samples",
+        "samples per channel",
+    ),
+    _P("n_components", 30, integer(1), "eigenvectors kept, f", "--components", "eigenvectors f"),
+    _P(
+        "n_clusters",
+        30,
+        integer(1),
+        "k-means clusters = primitives, k",
+        "--clusters",
+        "primitives k",
+    ),
+    _P("n_init", 10, integer(1), "k-means restarts", "--n-init", "k-means restarts"),
+    _P(
+        "max_iter",
+        300,
+        integer(1),
+        "k-means iterations per restart",
+        "--max-iter",
+        "k-means iterations per restart",
+    ),
+    _P(
+        "tol",
+        1e-4,
+        real(0.0, open_low=False),
+        "k-means convergence tolerance (scikit-learn's meaning)",
+        None,
+    ),
+    _P("seed", 0, integer(0), "seed of k-means", "--seed", "k-means seed"),
+)
+
+#: The parameters by name.
+BY_NAME: Mapping[str, Parameter] = {p.name: p for p in PARAMETERS}
+
+#: The paper's exact method: the values its preset fixes (the other defaults are the
+#: paper's already).
+PAPER: Mapping[str, Any] = {p.name: p.paper for p in PARAMETERS if p.fixed_by_paper}
+
+
+def defaults() -> dict[str, Any]:
+    """Every parameter's default."""
+    return {p.name: p.default for p in PARAMETERS}
+
+
+def check_params(params: Mapping[str, Any], owner: str = "PrimitiveModel") -> None:
+    """Raise ValueError naming the first parameter of ``params`` that its constraint
+    refuses (unknown names are refused too)."""
+    for name, value in params.items():
+        p = BY_NAME.get(name)
+        if p is None:
+            raise ValueError(f"{owner} has no parameter {name!r}")
+        why = p.check(value)
+        if why is not None:
+            raise ValueError(f"{owner} parameter {name}={value!r}: {why}")
