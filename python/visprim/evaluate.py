@@ -60,6 +60,8 @@ from visprim import kernels
 from visprim.accuracy import angular_error_deg
 from visprim.classify import MotionClassifier, arm_directions, dtw_matrix
 from visprim.features import direction_rms_deg
+from visprim.io import BANDAI_NAME, FORMATS
+from visprim.params import STUDY_FRAME_PERIOD_S
 from visprim.segment.coverage import DEFAULT_MOVING_SPEED, segment_coverage
 from visprim.trial import Trial, split_arms
 
@@ -85,10 +87,10 @@ RECONSTRUCTION_K: tuple[int, ...] = (30, 100)
 #: Which primitives rebuild two-arm movements (:func:`evaluate_benchmark`).
 RECONSTRUCTIONS: tuple[str, ...] = ("each-arm", "joint")
 #: Frame period every recording is resampled to (s), as in the method (34 ms).
-DEFAULT_PERIOD: float = 0.034
+DEFAULT_PERIOD: float = STUDY_FRAME_PERIOD_S
 
-_EXTENSIONS = (".bvh", ".amc", ".c3d", ".csv")
-_BANDAI = re.compile(r"^dataset-(\d+)_([a-z0-9-]+)_([a-z]+)_(\d+)$")
+#: Extensions of the recordings searched for in folders: every reader's.
+_EXTENSIONS = tuple(FORMATS)
 
 
 @dataclass(frozen=True)
@@ -171,9 +173,9 @@ def find_recordings(
             if rows is not None:
                 row = rows.get(f.name)
         if row is None:
-            m = _BANDAI.match(f.stem)
+            m = BANDAI_NAME.match(f.stem)
             if m is not None and given is None:
-                row = {"label": m[2], "style": m[3], "take": m[4], "subject": ""}
+                row = {"label": m["content"], "style": m["style"], "take": m["take"], "subject": ""}
         if row is None or not (row.get("label") or "").strip():
             unlabelled.append(f)
             continue

@@ -55,6 +55,7 @@ from scipy.spatial.transform import Rotation
 
 from visprim.arm import ANGLE_NAMES, shoulder_rotation_body
 from visprim.features import direction_rms_deg
+from visprim.params import STUDY_FRAME_PERIOD_S
 from visprim.sim.joining import JoinedTrajectory
 from visprim.trial import Trial, split_arms
 
@@ -72,7 +73,7 @@ SOURCE_LABELS: dict[str, str] = {
 #: Arm of each part of a recording imitated arm by arm (:attr:`Imitation.segment_arm`).
 ARM_SIDES: tuple[str, str] = ("right", "left")
 #: Default frame period (s) for a model that does not record one (the study's 34 ms).
-DEFAULT_PERIOD_S = 0.034
+DEFAULT_PERIOD_S = STUDY_FRAME_PERIOD_S
 #: Spacing (s) of the rebuild samples handed to the simulation.
 PLAY_SAMPLE_S = 0.005
 

@@ -100,7 +100,11 @@ def register(sub: Any) -> None:
         "arms (default) or the classifier's two-arm primitives",
     )
     p.add_argument(
-        "--resample", type=float, default=0.034, help="frame period in seconds (default 0.034)"
+        "--resample",
+        type=common.period_s,
+        default=common.DEFAULT_RESAMPLE_S,
+        metavar="SECONDS",
+        help=f"frame period in seconds (default {common.DEFAULT_RESAMPLE_S:g})",
     )
     p.add_argument("--jobs", type=int, default=None, help="reader processes (default: cores)")
     p.add_argument("--out", default="out/evaluate", help="report folder (default out/evaluate)")

@@ -111,7 +111,8 @@ def register(sub: Any) -> None:
         default=common.DEFAULT_RESAMPLE_S,
         metavar="SECONDS",
         help="resample DATA to this frame period before learning, so that --cutoff and the "
-        "segmentation mean what they meant at the study's rate (default 0.034)",
+        f"segmentation mean what they meant at the study's rate (default "
+        f"{common.DEFAULT_RESAMPLE_S:g})",
     )
     p.add_argument(
         "--no-resample",

@@ -45,6 +45,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from visprim.arm import BODY_TO_SHOULDER, ArmLengths, forward_kinematics, rot_y, shoulder_rotation
+from visprim.params import STUDY_FRAME_PERIOD_S
 
 #: Nominal sensor offsets (metres) in segment coordinates (body axes at the zero posture):
 #: rows upper_arm, forearm, wrist, finger.
@@ -62,7 +63,7 @@ SKIN_OFFSETS_M: NDArray[np.float64] = np.array(
 class Measurement:
     """Parameters of the simulated measurement (units in the names: s, m, Hz)."""
 
-    frame_period_s: float = 0.034
+    frame_period_s: float = STUDY_FRAME_PERIOD_S
     jitter_sd_s: float = 0.0003
     noise_sd_m: float = 0.0004
     distortion_rms_m: float = 0.0011

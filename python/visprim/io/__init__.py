@@ -57,6 +57,7 @@ from visprim.io.resample import check_resample_period, resample_trial
 from visprim.trial import Trial, TrialError
 
 __all__ = [
+    "BANDAI_NAME",
     "FORMATS",
     "MARKER_PRESETS",
     "RIG_PRESETS",
@@ -95,7 +96,8 @@ _FORMAT_OPTIONS: dict[str, tuple[str, ...]] = {
     "mirror": ("bvh", "amc", "c3d", "amass"),
 }
 
-_BANDAI = re.compile(
+#: Bandai-Namco file names: ``dataset-<n>_<content>_<style>_<take>`` (the stem).
+BANDAI_NAME = re.compile(
     r"^dataset-(?P<dataset>\d+)_(?P<content>[a-z0-9-]+)_(?P<style>[a-z]+)_(?P<take>\d+)$"
 )
 
@@ -104,7 +106,7 @@ def labels_from_name(stem: str) -> dict[str, Any]:
     """Labels encoded in a file name. Bandai-Namco: ``dataset-2_wave-right-hand_normal_001`` →
     ``{"dataset": 2, "content": "wave-right-hand", "style": "normal", "take": 1}``; other
     names → ``{}``."""
-    m = _BANDAI.match(stem)
+    m = BANDAI_NAME.match(stem)
     if m is None:
         return {}
     return {
