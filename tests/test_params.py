@@ -128,3 +128,31 @@ def test_the_demo_reproduces_the_papers_table3():
     assert len(ratios) == 6
     for key, ratio in ratios.items():
         assert 1 / FACTOR <= ratio <= FACTOR, (key, ratio)
+
+
+@pytest.mark.parametrize("preset", [[], ["--paper"]])
+def test_the_printed_seg2_constant_given_back_cuts_the_same_segments(tmp_path, capsys, preset):
+    """``learn`` prints c in (deg/s)^2, the unit ``--seg2-threshold`` takes: pasting it back
+    gives the same segmentation."""
+    import re
+
+    import numpy as np
+    from visprim.cli import main
+
+    small = ["--subjects", "2", "--stimuli", "6", "--clusters", "5", "--components", "8"]
+    assert main(["learn", "--out", str(tmp_path / "a.npz"), *small, *preset]) == 0
+    out = capsys.readouterr().out
+    found = re.search(r"SEG-2 c = (\S+) \(deg/s\)\^2 \(--seg2-threshold\)", out)
+    assert found is not None, out
+    printed = found.group(1)
+    tuned = PrimitiveModel.load(tmp_path / "a.npz")
+    assert float(printed) == pytest.approx(tuned.seg2_threshold_ * params.DEG2_PER_RAD2, rel=1e-5)
+    argv = ["learn", "--out", str(tmp_path / "b.npz"), *small, *preset]
+    assert main([*argv, "--seg2-threshold", printed]) == 0
+    given = PrimitiveModel.load(tmp_path / "b.npz")
+    assert given.seg2_threshold == pytest.approx(tuned.seg2_threshold_, rel=1e-5)
+    assert given.n_training_segments_ == tuned.n_training_segments_
+    np.testing.assert_allclose(given.segment_starts_, tuned.segment_starts_)
+    np.testing.assert_allclose(given.segment_ends_, tuned.segment_ends_)
+    # The tables are printed in deg^2, as report and demo print them.
+    assert "(deg^2)" in out and "(rad^2)" not in out

@@ -61,7 +61,7 @@ from visprim.accuracy import angular_error_deg
 from visprim.classify import MotionClassifier, arm_directions, dtw_matrix
 from visprim.features import direction_rms_deg
 from visprim.io import BANDAI_NAME, FORMATS
-from visprim.params import STUDY_FRAME_PERIOD_S
+from visprim.params import DEG2_PER_RAD2, STUDY_FRAME_PERIOD_S
 from visprim.segment.coverage import DEFAULT_MOVING_SPEED, segment_coverage
 from visprim.trial import Trial, split_arms
 
@@ -615,7 +615,7 @@ def summary_rows(results: Sequence[BenchmarkResult]) -> list[dict[str, Any]]:
     """One row per benchmark: the figures of the markdown table (for the CSV)."""
     rows = []
     for r in results:
-        c = list(r.seg2_thresholds.values())
+        c = [v * DEG2_PER_RAD2 for v in r.seg2_thresholds.values()]  # (deg/s)²
         rows.append(
             {
                 "benchmark": r.name,
@@ -630,8 +630,8 @@ def summary_rows(results: Sequence[BenchmarkResult]) -> list[dict[str, Any]]:
                 "arm_trials": r.n_arm_trials,
                 "coverage_median": round(r.coverage_median, 4),
                 "coverage_min": round(r.coverage_min, 4),
-                "seg2_c_min": round(float(np.nanmin(c)), 4) if c else "",
-                "seg2_c_max": round(float(np.nanmax(c)), 4) if c else "",
+                "seg2_c_min_deg2_s2": round(float(np.nanmin(c)), 1) if c else "",
+                "seg2_c_max_deg2_s2": round(float(np.nanmax(c)), 1) if c else "",
                 **{
                     f"total_error_deg_k{k}": round(r.reconstruction_deg.get(k, float("nan")), 2)
                     for k in RECONSTRUCTION_K
@@ -662,12 +662,12 @@ def to_markdown(results: Sequence[BenchmarkResult], notes: Sequence[str] = ()) -
     )
     out.append("|" + "---|" * (10 + 2 * len(RECONSTRUCTION_K) + 1))
     for r in results:
-        cs = ", ".join(f"{v:.3g}" for v in r.seg2_thresholds.values())
+        cs = ", ".join(f"{v * DEG2_PER_RAD2:.4g}" for v in r.seg2_thresholds.values())
         out.append(
             f"| {r.name} | {len(r.groups)} {r.group_by} | {r.n_trials} | {len(r.classes)} | "
             f"**{r.accuracy:.3f}** | {r.baseline_accuracy:.3f} | {r.segments_per_trial:.2f} | "
             f"{r.trials_without_segments}/{r.n_arm_trials} | {_pct(r.coverage_median)} "
-            f"({_pct(r.coverage_min)}) | {cs} (rad/s)² | "
+            f"({_pct(r.coverage_min)}) | {cs} (deg/s)² | "
             + " | ".join(_deg(r.reconstruction_deg.get(k, float("nan"))) for k in RECONSTRUCTION_K)
             + " | "
             + " | ".join(_deg(r.amplitude_deg.get(k, float("nan"))) for k in RECONSTRUCTION_K)

@@ -538,11 +538,19 @@ def summary(model: Any, n_trials: int) -> str:
     """One line on a fitted model: segments, SEG-2 c, f and k."""
     import math
 
+    from visprim.params import BY_NAME
+
     deg2 = math.degrees(1.0) ** 2
     thr = model.seg2_threshold_
-    # c in (deg/s)^2: Euler angles in rad, or unit bone directions whose speed is the
-    # bone's angular speed in rad/s.
-    c = f", SEG-2 c = {thr * deg2:.4g} (deg/s)^2" if thr is not None else ""
+    # c in the unit --seg2-threshold takes, (deg/s)^2: Euler angles in rad, or unit bone
+    # directions whose speed is the bone's angular speed in rad/s. Six digits, so that the
+    # printed value given back to --seg2-threshold cuts the same segments.
+    option = BY_NAME["seg2_threshold"]
+    c = (
+        f", SEG-2 c = {option.to_option(thr):.6g} {option.option_unit} ({option.option})"
+        if thr is not None
+        else ""
+    )
     empty = getattr(model, "n_trials_without_segments_", 0)
     short = getattr(model, "n_short_trials_", 0)
     notes = f"; {empty} trial(s) without a segment" if empty else ""

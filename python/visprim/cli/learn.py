@@ -37,7 +37,9 @@ def run(args: argparse.Namespace) -> int:
     path = save_model(model, out)
     print(common.summary(model, len(trials)))
     print()
-    print(tables.to_markdown())
+    from visprim.report.paper import tables_in_degrees
+
+    print(tables_in_degrees(tables).to_markdown())
     print(f"model written to {path}")
     return 0
 
