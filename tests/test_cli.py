@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 from visprim import PrimitiveModel
 from visprim.cli import build_parser, main
+from visprim.provenance import Provenance
 
 SMALL = ["--subjects", "2", "--stimuli", "20", "--clusters", "8"]
 
@@ -38,13 +39,7 @@ def learned(tmp_path_factory):
 def test_learn_writes_a_model_and_prints_tables(learned, capsys):
     m = PrimitiveModel.load(learned)
     assert m.n_primitives == 8
-    assert m.training_source_ == {
-        "kind": "generated",
-        "n_subjects": 2,
-        "n_stimuli": 20,
-        "seed": 0,
-        "preset": "paper",
-    }
+    assert m.provenance_ == Provenance.generated(2, 20, 0, "paper")
     assert m.error_tables_ is not None
     assert m.get_params()["n_clusters"] == 8
 

@@ -209,7 +209,7 @@ def test_reader_options_reach_read_many(tmp_path, monkeypatch, capsys):
     # Defaults: unreadable files skipped with a warning; options recorded for `report`.
     from visprim import PrimitiveModel
 
-    assert PrimitiveModel.load(tmp_path / "m.npz").training_source_["options"]["rate"] == 60.0
+    assert PrimitiveModel.load(tmp_path / "m.npz").provenance_.reader_options["rate"] == 60.0
     seen.clear()
     assert run(["learn", str(tmp_path), "--out", str(tmp_path / "n.npz"), "--clusters", "6"]) == 0
     assert seen["on_error"] == "warn" and seen["arm"] == "right" and "mapping" not in seen

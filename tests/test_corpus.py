@@ -53,7 +53,8 @@ def test_options_reach_the_reader(folder):
     corpus = Corpus(folder, resample=0.05)
     trial = corpus.read([0])[0]
     np.testing.assert_allclose(np.diff(trial.times), 0.05, atol=1e-9)
-    assert corpus.source["kind"] == "files" and corpus.source["resample"] == 0.05
+    record = corpus.provenance
+    assert record.kind == "recordings" and record.frame_period == 0.05
 
 
 def test_subset_and_pickle(folder):
@@ -102,8 +103,8 @@ def test_streaming_fit_of_files_equals_the_in_memory_fit(folder):
     np.testing.assert_array_equal(lazy.segment_starts_, eager.segment_starts_)
     assert lazy.trial_names_ == eager.trial_names_
     assert abs(lazy.inertia_ - eager.inertia_) <= 0.005 * eager.inertia_
-    assert lazy.training_source_["kind"] == "files"
-    assert len(lazy.training_source_["paths"]) == 12
+    assert lazy.provenance_.kind == "recordings"
+    assert len(lazy.provenance_.files) == 12
 
 
 def test_each_arm_reads_both_arms_as_one_arm_trials(shared_data):
@@ -120,7 +121,7 @@ def test_each_arm_reads_both_arms_as_one_arm_trials(shared_data):
     for a, b in zip(got, want, strict=True):
         np.testing.assert_array_equal(a.markers, b.markers)
     assert pickle.loads(pickle.dumps(corpus)).arm == "each"
-    assert corpus.source["options"] == {"arm": "each"}
-    assert "options" not in Corpus(files).source
+    assert corpus.provenance.reader_options == {"arm": "each"}
+    assert Corpus(files).provenance.reader_options == {}
     with pytest.raises(ValueError, match="arm"):
         Corpus(files, arm="several")

@@ -55,7 +55,7 @@ def _tiny_model_file(path: Path) -> Path:
             "seg2_threshold": 2.0,
             "n_training_segments": 5,
             "trial_names": ["a", "b"],
-            "training_source": {},
+            "provenance": {"kind": "arrays", "frame_period": None},
         },
         "error_tables": None,
     }

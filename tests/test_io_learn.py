@@ -36,7 +36,7 @@ def test_learn_small_folder_then_classify_the_same_frames(
     m = PrimitiveModel.load(model_path)
     assert m.n_primitives == 8
     assert sorted(m.trial_names_) == ["kinematics_racing_full", "kinematics_tennis_serve"]
-    assert m.training_source_["resample"] == pytest.approx(0.034)
+    assert m.frame_period_ == pytest.approx(0.034)
 
     # classify resamples DATA to the model's period, so the same recordings are cut into
     # exactly the training segments (at the files' 50/70 Hz they would not be).

@@ -22,6 +22,7 @@ from visprim.modelfile import (
     read_header,
     save_model,
 )
+from visprim.provenance import Provenance
 
 
 @pytest.fixture(scope="module")
@@ -52,7 +53,8 @@ def test_round_trip(saved):
     assert m2.seg2_threshold_ == m.seg2_threshold_
     assert m2.inertia_ == m.inertia_
     assert m2.trial_names_ == m.trial_names_
-    assert m2.training_source_ == SOURCE
+    assert m2.provenance_ == Provenance.from_dict(SOURCE)
+    assert m2.provenance_.preset == "strokes" and m2.frame_period_ == pytest.approx(0.034)
     np.testing.assert_array_equal(m2.training_vectors_, m.training_vectors_)
     x = m.training_vectors_[:20]
     np.testing.assert_array_equal(m2.predict(x), m.predict(x))
@@ -194,7 +196,7 @@ def test_files_without_offsets_hold_absolute_vectors(saved, tmp_path):
         lambda h: h.update(fitted="x"),
         lambda h: h["fitted"].update(trial_names="abc"),
         lambda h: h["fitted"].update(n_iter=1.5),
-        lambda h: h["fitted"].update(training_source=None),
+        lambda h: h["fitted"].update(provenance=None),
         lambda h: h["fitted"].pop("inertia"),
         lambda h: h.update(arrays={"mean": 3}),
         lambda h: h["arrays"]["mean"].update(shape="400"),

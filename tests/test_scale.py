@@ -10,6 +10,7 @@ import pytest
 from visprim.datasets import imitation_experiment
 from visprim.io.corpus import GeneratedCorpus, sample_items
 from visprim.model import PrimitiveModel
+from visprim.provenance import Provenance
 from visprim.scale import TrialList, fit_streaming, tune_threshold
 from visprim.segment.seg2 import speed_squared_concatenated, tune_seg2_threshold_concatenated
 
@@ -76,12 +77,7 @@ def test_streaming_fit_equals_the_in_memory_fit(in_memory, chunk):
     fit_streaming(streamed, corpus, chunk_size=chunk)
     assert_same_fit(in_memory, streamed)
     np.testing.assert_array_equal(streamed.labels_, in_memory.labels_)
-    assert streamed.training_source_ == {
-        "kind": "generated",
-        "n_subjects": N_SUBJECTS,
-        "n_stimuli": N_STIMULI,
-        "seed": 1,
-    }
+    assert streamed.provenance_ == Provenance.generated(N_SUBJECTS, N_STIMULI, 1, "paper")
 
 
 def test_fit_dispatches_a_lazy_corpus_and_keeps_only_what_the_model_needs(in_memory):
@@ -107,7 +103,7 @@ def test_save_and_load_a_streamed_model(tmp_path):
     m.save(tmp_path / "m.npz")
     m2 = PrimitiveModel.load(tmp_path / "m.npz")
     np.testing.assert_array_equal(m2.cluster_centers_, m.cluster_centers_)
-    assert m2.training_source_["kind"] == "generated"
+    assert m2.provenance_ == m.provenance_ and m2.provenance_.kind == "generated"
 
 
 def test_seg2_is_tuned_on_the_in_memory_fits_sample(trials):

@@ -72,7 +72,7 @@ def test_dask_fit_equals_streaming_and_in_memory(client, in_memory):
     assert in_memory.n_training_segments_ <= clustering.sample_size(PARAMS["n_clusters"])
     np.testing.assert_array_equal(on_dask.labels_, in_memory.labels_)
     assert on_dask.inertia_ == pytest.approx(in_memory.inertia_, rel=1e-9)
-    assert on_dask.training_source_["kind"] == "generated"
+    assert on_dask.provenance_.kind == "generated"
     # Labels are the nearest centres of the projections.
     np.testing.assert_array_equal(
         on_dask.labels_, on_dask.assign(in_memory.training_projections_)[0]

@@ -90,7 +90,7 @@ __all__ = [
 def model_frame_period(model: Any) -> float | None:
     """The frame period (s) recordings are resampled to for ``model``: the one recorded by
     ``visprim learn`` (None: the files' own rate), else 34 ms."""
-    period = (getattr(model, "training_source_", None) or {}).get("resample", DEFAULT_PERIOD_S)
+    period = getattr(model, "frame_period_", DEFAULT_PERIOD_S)
     return None if period is None else float(period)
 
 

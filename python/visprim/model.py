@@ -26,7 +26,7 @@ radians throughout the API; degrees only in reports (and the ``zvc_threshold_deg
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from os import PathLike
 from typing import Any, Literal, TypeGuard
 
@@ -42,6 +42,7 @@ from visprim.features import n_channels, periodic_channels, to_angles
 from visprim.params import PAPER, check_params, defaults
 from visprim.pca import PCABasis, fit_pca
 from visprim.preprocess import PreparedCorpus, prepare_corpus
+from visprim.provenance import Provenance
 from visprim.trial import Trial
 from visprim.vectors import (
     SegmentVectors,
@@ -150,8 +151,13 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         ``save(..., include_vectors=False)``).
     error_tables_ : ErrorTables or None
         Tables 1–3 once :meth:`error_table` ran (saved with the model).
-    training_source_ : dict
-        How to get the training trials again (for reports).
+    provenance_ : Provenance
+        What the model was fitted on (:mod:`visprim.provenance`): the generated experiment,
+        recordings, bare vectors or trials given in memory; ``visprim report`` reads the
+        trials again from it.
+    frame_period_ : float or None
+        Frame period of the training trials, seconds (None: recordings at their own rates,
+        or bare vectors); recordings given to the model later are resampled to it.
 
     See Also
     --------
@@ -321,7 +327,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         trials: Sequence[Trial] | ArrayLike,
         y: Any = None,
         *,
-        source: dict[str, Any] | None = None,
+        source: Provenance | Mapping[str, Any] | None = None,
         client: Any = None,
     ) -> PrimitiveModel:
         """Learn the primitives from trials or from segment vectors.
@@ -334,10 +340,10 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
             :mod:`visprim.vectors`; the model then has no durations or trial names).
         y : None
             Ignored (scikit-learn convention).
-        source : dict, optional
-            How to get the trials again (e.g. ``{"kind": "generated", ...}`` or
-            ``{"kind": "files", "paths": [...]}``) so that ``visprim report`` can redraw the
-            trial figures.
+        source : Provenance, optional
+            What the trials are (:class:`visprim.provenance.Provenance`, or its dict), so
+            that ``visprim report`` can redraw the trial figures; default: trials given in
+            memory (or bare vectors), which cannot be read again.
         client : dask.distributed.Client, str or True, optional
             Learn a lazy corpus on Dask: a client, a scheduler address, or ``True`` for a
             local cluster (see below).
@@ -358,26 +364,28 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         ValueError
             Bad parameters, an empty corpus, fewer segments than ``n_clusters`` (or than 2).
         """
+        record = None if source is None else _as_provenance(source)
         if client is not None or hasattr(trials, "chunk_ranges"):
             from visprim.scale import fit_corpus
 
-            return fit_corpus(self, trials, client=client, source=source)
+            return fit_corpus(self, trials, client=client, source=record)
         self._validate_params()
         if not _are_trials(trials):
-            return self._fit_array(trials, source=source)
+            return self._fit_array(trials, source=record or Provenance.arrays())
         trials = _as_trials(trials)
+        record = record or Provenance.trials(trials)
         for attr in [a for a in vars(self) if a.endswith("_") and not a.startswith("_")]:
             delattr(self, attr)
         corpus = self.prepare(trials, tune_seg2=True)
         sv = self.vectorize(corpus)
-        return self._fit_vectors(sv, corpus, source=source)
+        return self._fit_vectors(sv, corpus, source=record)
 
     def _fit_vectors(
         self,
         sv: SegmentVectors,
         corpus: PreparedCorpus | None = None,
         *,
-        source: dict[str, Any] | None = None,
+        source: Provenance,
     ) -> PrimitiveModel:
         n = len(sv)
         if n < 2:
@@ -418,7 +426,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         n_without_segments: int,
         n_short: int,
         vectors: NDArray[np.float64] | None,
-        source: dict[str, Any] | None,
+        source: Provenance,
         clusters: tuple[NDArray[np.float64], NDArray[np.int64], float, int] | None = None,
     ) -> PrimitiveModel:
         """Store the fitted state: the PCA ``basis``, k-means of the (N, f) ``projections``
@@ -458,7 +466,8 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         self.training_vectors_: NDArray[np.float64] | None = vectors
         self.training_projections_: NDArray[np.float64] | None = projections
         self.error_tables_: ErrorTables | None = None
-        self.training_source_ = dict(source or {})
+        self.provenance_ = source
+        self.frame_period_ = source.frame_period
         return self
 
     # ------------------------------------------------------------------ properties
@@ -739,34 +748,14 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         a smaller file whose :meth:`error_table` only returns the tables computed before
         saving.
         """
-        from visprim.modelfile import write_model_file
+        from visprim.modelfile import FITTED_FIELDS, REQUIRED_ARRAYS, write_model_file
 
         self._check_fitted()
-        arrays: dict[str, Any] = {
-            "mean": self.mean_,
-            "eigenvalues": self.eigenvalues_,
-            "eigenvectors": self.eigenvectors_,
-            "cluster_centers": self.cluster_centers_,
-            "labels": self.labels_,
-            "segment_trial": self.segment_trial_,
-            "segment_starts": self.segment_starts_,
-            "segment_ends": self.segment_ends_,
-            "primitive_durations": self.primitive_durations_,
-        }
+        arrays: dict[str, Any] = {name: getattr(self, name + "_") for name in REQUIRED_ARRAYS}
         if include_vectors and getattr(self, "training_vectors_", None) is not None:
             arrays["training_vectors"] = self.training_vectors_
         tables = getattr(self, "error_tables_", None)
-        fitted = {
-            "inertia": float(self.inertia_),
-            "n_iter": int(self.n_iter_),
-            "seg2_threshold": None if self.seg2_threshold_ is None else float(self.seg2_threshold_),
-            "n_training_segments": int(self.n_training_segments_),
-            "trial_names": [str(n) for n in self.trial_names_],
-            "training_source": dict(self.training_source_ or {}),
-            "arms": list(getattr(self, "arms_", ("right",))),
-            "n_trials_without_segments": int(getattr(self, "n_trials_without_segments_", 0)),
-            "n_short_trials": int(getattr(self, "n_short_trials_", 0)),
-        }
+        fitted = {name: _fitted_value(getattr(self, name + "_")) for name in FITTED_FIELDS}
         header = {
             "parameters": self.get_params(),
             "fitted": fitted,
@@ -778,42 +767,33 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
     def load(cls, path: str | PathLike[str]) -> PrimitiveModel:
         """Read a model written by :meth:`save` (see :mod:`visprim.modelfile`); its
         parameters are checked as :meth:`fit` checks them."""
-        from visprim.modelfile import ModelFileError, load_model
+        from visprim.modelfile import FITTED_FIELDS, REQUIRED_ARRAYS, ModelFileError, load_model
 
         contents = load_model(path)
         a, fitted = contents.arrays, contents.fitted
-        arms = fitted.get("arms", ["right"])
         try:
-            if not isinstance(arms, list) or not 1 <= len(arms) <= 2:
-                raise ValueError(f"arms {arms!r} is not a list of one or two arms")
-            if any(side not in ("right", "left") for side in arms):
-                raise ValueError(f"arms {arms!r} are not 'right'/'left'")
             # Files written before the ``offsets`` parameter hold absolute vectors.
             model = cls(**{"offsets": "turns", **contents.parameters})
-            model.arms_ = tuple(arms)
             model._validate_params()
             tables = contents.error_tables
             model.error_tables_ = ErrorTables.from_dict(tables) if tables else None
+            provenance = Provenance.from_dict(fitted["provenance"])
         except (TypeError, ValueError, LookupError, AttributeError) as exc:
             raise ModelFileError(f"{contents.path}: model parameters not accepted: {exc}") from None
-        if a["mean"].shape[0] != model.dim or a["cluster_centers"].shape[1] != model.n_components:
-            raise ModelFileError(
-                f"{contents.path}: damaged model file: array shapes do not fit the parameters"
-            )
-        for name in ("mean", "eigenvalues", "eigenvectors", "cluster_centers", "labels"):
-            setattr(model, name + "_", a[name])
-        for name in ("segment_trial", "segment_starts", "segment_ends", "primitive_durations"):
+        for name in FITTED_FIELDS:
+            setattr(model, name + "_", fitted[name])
+        model.arms_ = tuple(fitted["arms"])
+        model.provenance_ = provenance
+        model.frame_period_ = provenance.frame_period
+        model.n_training_segments_ = int(fitted["n_training_segments"]) or len(a["labels"])
+        for name in REQUIRED_ARRAYS:
             setattr(model, name + "_", a[name])
         model.training_vectors_ = a.get("training_vectors")
         model.training_projections_ = None
-        model.inertia_ = float(fitted["inertia"])
-        model.n_iter_ = int(fitted["n_iter"])
-        model.seg2_threshold_ = fitted["seg2_threshold"]
-        model.n_training_segments_ = int(fitted["n_training_segments"]) or len(a["labels"])
-        model.trial_names_ = list(fitted["trial_names"])
-        model.training_source_ = dict(fitted["training_source"])
-        model.n_trials_without_segments_ = int(fitted.get("n_trials_without_segments", 0))
-        model.n_short_trials_ = int(fitted.get("n_short_trials", 0))
+        model.n_features_in_ = int(a["mean"].shape[0])
+        problem = check_fitted_arrays(model)
+        if problem is not None:
+            raise ModelFileError(f"{contents.path}: damaged model file: {problem}")
         return model
 
     def __sklearn_is_fitted__(self) -> bool:
@@ -846,7 +826,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
             )
         return x
 
-    def _fit_array(self, X: Any, *, source: dict[str, Any] | None = None) -> PrimitiveModel:
+    def _fit_array(self, X: Any, *, source: Provenance) -> PrimitiveModel:
         """``fit`` on vectors (N, d): segment vectors (d = C n_samples), or any features, for
         which the PCA and k-means parts work but the angle-curve methods do not."""
         x = self._check_vectors(X, fitting=True)
@@ -1006,3 +986,88 @@ def _mean_durations(
     with np.errstate(invalid="ignore", divide="ignore"):
         out = np.where(counts > 0, sums / np.maximum(counts, 1), overall)
     return out
+
+
+def _as_provenance(source: Provenance | Mapping[str, Any]) -> Provenance:
+    """``fit``'s ``source``: a record, or its dict (checked)."""
+    if isinstance(source, Provenance):
+        return source
+    if isinstance(source, Mapping):
+        return Provenance.from_dict(source)
+    raise TypeError(f"source must be a visprim.provenance.Provenance, got {type(source).__name__}")
+
+
+def _fitted_value(value: Any) -> Any:
+    """A fitted attribute as the model file's header holds it (JSON types)."""
+    if isinstance(value, Provenance):
+        return value.to_dict()
+    if isinstance(value, tuple):
+        return list(value)
+    if isinstance(value, (np.integer, np.floating)):
+        return value.item()
+    if isinstance(value, list):
+        return [str(v) for v in value]
+    return value
+
+
+#: Longest mean primitive duration a model file may hold, seconds.
+MAX_PRIMITIVE_S = 3600.0
+
+
+def check_fitted_arrays(model: PrimitiveModel) -> str | None:  # noqa: C901 (a flat list)
+    """The first inconsistency between a (loaded) model's arrays and its parameters, or
+    None: shapes (d, f, k, N), finite values, labels in range, segment times finite and
+    ordered, primitive durations finite, positive and at most :data:`MAX_PRIMITIVE_S`
+    (NaN for a model fitted on bare vectors)."""
+    trial = model.segment_trial_
+    bare = trial.ndim == 1 and trial.size > 0 and bool(np.all(trial == -1))
+    # Bare vectors may be any features; segment vectors have the parameters' dimension.
+    d = int(model.mean_.shape[0]) if bare and model.mean_.ndim == 1 else model.dim
+    f, k = int(model.n_components), int(model.n_clusters)
+    centers, labels = model.cluster_centers_, model.labels_
+    n = labels.shape[0] if labels.ndim == 1 else -1
+    shapes = {
+        "mean": (model.mean_, (d,)),
+        "eigenvalues": (model.eigenvalues_, (d,)),
+        "cluster_centers": (centers, (k, f)),
+        "labels": (labels, (n,)),
+        "segment_trial": (model.segment_trial_, (n,)),
+        "segment_starts": (model.segment_starts_, (n,)),
+        "segment_ends": (model.segment_ends_, (n,)),
+        "primitive_durations": (model.primitive_durations_, (k,)),
+    }
+    for name, (arr, shape) in shapes.items():
+        if arr.shape != shape:
+            return f"'{name}' has shape {arr.shape}, the parameters need {shape}"
+    e = model.eigenvectors_
+    if e.ndim != 2 or e.shape[0] != d or not f <= e.shape[1] <= d:
+        return f"'eigenvectors' has shape {e.shape}, the parameters need ({d}, f..{d}) with f = {f}"
+    if n < max(k, 2) or model.n_training_segments_ != n:
+        return f"{n} training segments for {k} primitives ({model.n_training_segments_} recorded)"
+    for name in ("mean", "eigenvalues", "eigenvectors", "cluster_centers"):
+        if not np.all(np.isfinite(getattr(model, name + "_"))):
+            return f"'{name}' holds values that are not finite"
+    if labels.dtype.kind != "i" or labels.size and (labels.min() < 0 or labels.max() >= k):
+        return f"'labels' are not primitive indices in [0, {k})"
+    n_trials = len(model.trial_names_)
+    if not bare and (trial.min() < 0 or trial.max() >= max(n_trials, 1)):
+        return f"'segment_trial' is not a trial index in [0, {n_trials})"
+    starts, ends, durations = model.segment_starts_, model.segment_ends_, model.primitive_durations_
+    if bare:
+        if not (np.all(np.isnan(starts)) and np.all(np.isnan(ends))):
+            return "a model fitted on bare vectors has segment times"
+        if not np.all(np.isnan(durations) | ((durations > 0) & (durations <= MAX_PRIMITIVE_S))):
+            return "'primitive_durations' out of range"
+    else:
+        if not (np.all(np.isfinite(starts)) and np.all(np.isfinite(ends))):
+            return "segment times are not finite"
+        if np.any(ends <= starts):
+            return "a segment ends before it starts"
+        if not (np.all(np.isfinite(durations)) and np.all(durations > 0)):
+            return "'primitive_durations' are not finite positive seconds"
+        if np.any(durations > MAX_PRIMITIVE_S):
+            return f"'primitive_durations' exceed {MAX_PRIMITIVE_S:g} s"
+    tv = model.training_vectors_
+    if tv is not None and (tv.shape != (n, d) or not np.all(np.isfinite(tv))):
+        return f"'training_vectors' are not {n} finite vectors of dimension {d}"
+    return None

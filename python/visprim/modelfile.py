@@ -11,8 +11,11 @@ A NumPy ``.npz`` (zip) archive of ``.npy`` members (never pickles), with these m
 ``header``
     uint8 array: UTF-8 JSON object with ``format`` = ``"visprim.PrimitiveModel"``,
     ``format_version`` = 2, ``visprim_version``, ``parameters`` (the estimator's constructor
-    arguments), ``fitted`` (inertia, n_iter, seg2_threshold in (rad/s)², n_training_segments,
-    trial_names, training_source), ``error_tables`` (Tables 1–3 or null), ``arrays`` (for
+    arguments), ``fitted`` (the fields of :data:`FITTED_FIELDS`: inertia,
+    n_iter, seg2_threshold in (rad/s)², n_training_segments, trial_names, arms, counts of
+    trials without segments and of short trials, and the provenance record of
+    :class:`~visprim.provenance.Provenance`; older files' ``training_source`` is read as
+    the provenance), ``error_tables`` (Tables 1–3 or null), ``arrays`` (for
     every array member its shape, dtype and SHA-256 of its bytes) and ``header_sha256``: the
     SHA-256 of the rest of the header as canonical JSON (sorted keys, no spaces). Every byte
     that matters is therefore checksummed: the header directly, the arrays through it.
@@ -286,6 +289,47 @@ def _is_number(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
 
 
+def _finite(v: Any) -> bool:
+    return _is_number(v) and math.isfinite(v)
+
+
+def _count(v: Any) -> bool:
+    return _is_int(v) and v >= 0
+
+
+#: The fitted scalars of the header's ``fitted`` object: name -> (check, what it must be).
+#: The model keeps each as its attribute ``name + "_"`` (``provenance`` as a
+#: :class:`~visprim.provenance.Provenance`, checked further when the model is built).
+FITTED_FIELDS: dict[str, tuple[Any, str]] = {
+    "inertia": (lambda v: _finite(v) and v >= 0, "a finite number >= 0"),
+    "n_iter": (_count, "an integer >= 0"),
+    "seg2_threshold": (
+        lambda v: v is None or (_finite(v) and v > 0),
+        "a finite number > 0 or null",
+    ),
+    "n_training_segments": (_count, "an integer >= 0"),
+    "trial_names": (
+        lambda v: isinstance(v, list) and all(isinstance(x, str) for x in v),
+        "a list of strings",
+    ),
+    "arms": (
+        lambda v: (
+            isinstance(v, list) and v in (["right"], ["left"], ["right", "left"], ["left", "right"])
+        ),
+        "a list of one or two arms ('right', 'left')",
+    ),
+    "n_trials_without_segments": (_count, "an integer >= 0"),
+    "n_short_trials": (_count, "an integer >= 0"),
+    "provenance": (lambda v: isinstance(v, dict), "an object"),
+}
+#: Fitted fields that files written by older versions may lack, and what their absence means.
+OLDER_FITTED: dict[str, Any] = {
+    "arms": ["right"],
+    "n_trials_without_segments": 0,
+    "n_short_trials": 0,
+}
+
+
 def _check_structure(header: Any, path: Path) -> dict[str, Any]:
     """Types of every header field this module and the model rely on."""
     if not isinstance(header, dict):
@@ -316,20 +360,16 @@ def _check_structure(header: Any, path: Path) -> dict[str, Any]:
     fitted = header.get("fitted")
     if not isinstance(fitted, dict):
         raise bad("fitted", "an object")
-    checks = {
-        "inertia": (_is_number, "a number"),
-        "n_iter": (_is_int, "an integer"),
-        "seg2_threshold": (lambda v: v is None or _is_number(v), "a number or null"),
-        "n_training_segments": (_is_int, "an integer"),
-        "trial_names": (
-            lambda v: isinstance(v, list) and all(isinstance(x, str) for x in v),
-            "a list of strings",
-        ),
-        "training_source": (lambda v: isinstance(v, dict), "an object"),
-    }
-    for key, (ok, expected) in checks.items():
+    if "provenance" not in fitted and "training_source" in fitted:  # an older file
+        fitted["provenance"] = fitted.pop("training_source")
+    for key, value in OLDER_FITTED.items():
+        fitted.setdefault(key, value)
+    for key, (ok, expected) in FITTED_FIELDS.items():
         if key not in fitted or not ok(fitted[key]):
             raise bad(f"fitted.{key}", expected)
+    unknown = sorted(set(fitted) - set(FITTED_FIELDS))
+    if unknown:
+        raise _fail(path, f"damaged model file: unknown fitted field(s) {', '.join(unknown)}")
     if not isinstance(header.get("error_tables"), (dict, type(None))):
         raise bad("error_tables", "an object or null")
     specs = header.get("arrays")

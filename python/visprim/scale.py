@@ -59,6 +59,7 @@ from visprim.clustering import kmeans_projections, sample_candidates, sample_row
 from visprim.io.corpus import LazyCorpus, sample_items, trial_names
 from visprim.pca import PCABasis
 from visprim.progress import _disable
+from visprim.provenance import Provenance
 from visprim.segment.seg2 import _MAX_TRIALS
 from visprim.trial import Trial
 
@@ -89,8 +90,8 @@ class TrialList(LazyCorpus):
         return TrialList([self.trials[self._index(i)] for i in indices])
 
     @property
-    def source(self) -> dict[str, Any]:
-        return {}
+    def provenance(self) -> Provenance:
+        return Provenance.trials(self.trials)
 
 
 # ---------------------------------------------------------------------------- map steps
@@ -235,7 +236,7 @@ def _finish(
     projections: NDArray[np.float64] | None,
     segs: _Segments,
     threshold: float | None,
-    source: dict[str, Any],
+    source: Any,
     clusters: tuple[NDArray[np.float64], NDArray[np.int64], float, int] | None = None,
 ) -> Any:
     trial, starts, ends = segs.arrays()
@@ -270,7 +271,7 @@ def fit_streaming(
     *,
     chunk_size: int | None = None,
     spill_dir: str | Path | None = None,
-    source: dict[str, Any] | None = None,
+    source: Provenance | None = None,
 ) -> Any:
     """Fit ``model`` on a lazy corpus in bounded memory (see the module docstring).
 
@@ -280,7 +281,7 @@ def fit_streaming(
     spill_dir : folder for the temporary vector files of pass 1 (default: the system's
         temporary folder); needs 8 × 4 n_samples bytes per segment (3.2 kB at n = 100),
         removed when the fit ends.
-    source : recorded as ``training_source_`` (default: the corpus's own description).
+    source : recorded as ``provenance_`` (default: the corpus's own record).
     """
     threshold = tune_threshold(model, corpus)
     settings = _settings(model, threshold)
@@ -312,7 +313,7 @@ def fit_streaming(
     finally:
         bar.close()
         shutil.rmtree(tmp, ignore_errors=True)
-    return _finish(model, basis, projections, segs, threshold, dict(source or corpus.source))
+    return _finish(model, basis, projections, segs, threshold, source or corpus.provenance)
 
 
 def fit_corpus(
@@ -320,7 +321,7 @@ def fit_corpus(
     data: Any,
     *,
     client: Any = None,
-    source: dict[str, Any] | None = None,
+    source: Provenance | None = None,
     chunk_size: int | None = None,
 ) -> Any:
     """:meth:`PrimitiveModel.fit` on a lazy corpus, or on a Dask cluster (``client``: a
@@ -548,7 +549,7 @@ def fit_dask(
     client: Any,
     *,
     chunk_size: int | None = None,
-    source: dict[str, Any] | None = None,
+    source: Provenance | None = None,
 ) -> Any:
     """Fit ``model`` on a Dask cluster (see the module docstring).
 
@@ -587,7 +588,7 @@ def _fit_dask(
     corpus: LazyCorpus,
     client: Any,
     chunk_size: int | None,
-    source: dict[str, Any] | None,
+    source: Provenance | None,
 ) -> Any:
     n_workers = max(1, len(client.scheduler_info().get("workers", {})))
     threshold = client.submit(tune_threshold, model, corpus, pure=False).result()
@@ -617,7 +618,7 @@ def _fit_dask(
         None,
         segs,
         threshold,
-        dict(source or corpus.source),
+        source or corpus.provenance,
         clusters=clusters,
     )
 

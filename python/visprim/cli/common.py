@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from visprim.params import SHORT_POLICIES, SHORT_POLICY, STUDY_FRAME_PERIOD_S
+from visprim.provenance import PRESETS, Provenance
 from visprim.trial import EACH_ARM, Trial
 
 log = logging.getLogger(__name__)
@@ -102,41 +103,41 @@ def add_force_option(p: argparse.ArgumentParser) -> None:
 # ---------------------------------------------------------------------------- data
 
 
-def generated_source(args: argparse.Namespace) -> dict[str, Any]:
-    return {
-        "kind": "generated",
-        "n_subjects": int(getattr(args, "subjects", 11)),
-        "n_stimuli": int(getattr(args, "stimuli", 20)),
-        "seed": int(getattr(args, "data_seed", 0)),
-        "preset": str(getattr(args, "data_preset", "paper")),
-    }
+def generated_source(args: argparse.Namespace) -> Provenance:
+    """The generated experiment the options describe (``--subjects`` ... ``--data-preset``)."""
+    return Provenance.generated(
+        int(getattr(args, "subjects", 11)),
+        int(getattr(args, "stimuli", 20)),
+        int(getattr(args, "data_seed", 0)),
+        str(getattr(args, "data_preset", "paper")),
+    )
 
 
-def load_source(source: dict[str, Any], lowpass: tuple[int, float] | None = None) -> list[Trial]:
-    """Trials described by a model's ``training_source_`` (see the module docstring);
-    recordings too short for the ``lowpass`` (order, cutoff) are left out, as ``learn``
-    does by default."""
-    kind = source.get("kind")
-    if kind == "generated":
+def load_source(source: Provenance, lowpass: tuple[int, float] | None = None) -> list[Trial]:
+    """The trials of a provenance record (a model's ``provenance_``; see the module
+    docstring), bounded as :meth:`Provenance.check_reproducible` says; recordings too short
+    for the ``lowpass`` (order, cutoff) are left out as ``learn`` did. Raises
+    :class:`CLIError` for a record that cannot (or may not) be read again."""
+    from visprim.provenance import ProvenanceError
+
+    try:
+        source.check_reproducible()
+    except ProvenanceError as exc:
+        raise CLIError(f"cannot read the training data again: {exc}; give DATA instead") from None
+    if source.kind == "generated":
         from visprim.datasets import imitation_experiment
 
-        # Sources written before the presets existed describe the "strokes" generator.
         return imitation_experiment(
-            int(source.get("n_subjects", 11)),
-            int(source.get("n_stimuli", 20)),
-            int(source.get("seed", 0)),
-            preset=str(source.get("preset", "strokes")),
+            int(source.n_subjects or 0),
+            int(source.n_stimuli or 0),
+            int(source.seed or 0),
+            preset=str(source.preset),
+            **dict(source.generator_options),
         )
-    if kind == "files":
-        trials = read_files(
-            list(source.get("paths", [])),
-            source.get("resample"),
-            dict(source.get("options") or {}),
-            on_error="warn",
-        )
-        mode = str(source.get("short", SHORT_POLICY))
-        return trials if lowpass is None else drop_short(trials, lowpass, mode)
-    raise CLIError(f"unknown data source {source!r} recorded in the model; give DATA instead")
+    trials = read_files(
+        list(source.files), source.frame_period, dict(source.reader_options), on_error="warn"
+    )
+    return trials if lowpass is None else drop_short(trials, lowpass, source.short)
 
 
 def read_files(
@@ -193,7 +194,7 @@ def trials_and_source(
     args: argparse.Namespace,
     resample: float | None = None,
     lowpass: tuple[int, float] | None = None,
-) -> tuple[list[Trial], dict[str, Any]]:
+) -> tuple[list[Trial], Provenance]:
     """DATA (resampled to ``resample`` s, None = file rate) or the generated experiment.
 
     ``lowpass``: (order, cutoff) of the model's filter; with ``--short drop`` recordings too
@@ -208,13 +209,7 @@ def trials_and_source(
         short = str(getattr(args, "short", SHORT_POLICY))
         if lowpass is not None:
             trials = drop_short(trials, lowpass, short)
-        paths = [str(Path(p).resolve()) for p in data]
-        source: dict[str, Any] = {"kind": "files", "paths": paths, "resample": resample}
-        if options:
-            source["options"] = options
-        if short == "drop":
-            source["short"] = short
-        return trials, source
+        return trials, Provenance.recordings(data, resample, options, short)
     source = generated_source(args)
     return load_source(source), source
 
@@ -225,9 +220,9 @@ def model_lowpass(model: Any) -> tuple[int, float]:
 
 
 def model_period(model: Any) -> float | None:
-    """The period DATA given to ``report``/``classify`` is resampled to: the model's own
-    (recorded by ``learn``), else the default (models of generated data: 34 ms frames)."""
-    period = (model.training_source_ or {}).get("resample", DEFAULT_RESAMPLE_S)
+    """The period DATA given to ``report``/``classify`` is resampled to: the model's
+    ``frame_period_`` (None: each file's own rate)."""
+    period = model.frame_period_
     return None if period is None else float(period)
 
 
@@ -239,7 +234,7 @@ def add_generated_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--data-seed", type=seed_int, default=0, help="generator seed (default 0)")
     g.add_argument(
         "--data-preset",
-        choices=("paper", "strokes"),
+        choices=PRESETS,
         default="paper",
         help="generator preset: paper-like gestures (default) or easy strokes",
     )

@@ -18,7 +18,6 @@ log = logging.getLogger(__name__)
 
 
 def run(args: argparse.Namespace) -> int:
-    from visprim.datasets import imitation_experiment
     from visprim.modelfile import save_model
     from visprim.progress import stages
     from visprim.report import format_segmentation_scores, segmentation_scores, write_report
@@ -42,14 +41,12 @@ def run(args: argparse.Namespace) -> int:
         stages(7, "demo") as st,
     ):
         st.step("generating the experiment")
-        trials = imitation_experiment(
-            source["n_subjects"], source["n_stimuli"], source["seed"], preset=source["preset"]
-        )
+        trials = common.load_source(source)
         n_true = len({int(v) for t in trials for v in t.truth.labels})  # type: ignore[union-attr]
         say(
-            f"Generated experiment ({source['preset']!r} preset): {len(trials)} trials "
-            f"({source['n_subjects']} subjects x {source['n_stimuli']} stimuli, seed "
-            f"{source['seed']}), {n_true} true stroke kinds. Units: degrees, deg^2."
+            f"Generated experiment ({source.preset!r} preset): {len(trials)} trials "
+            f"({source.n_subjects} subjects x {source.n_stimuli} stimuli, seed "
+            f"{source.seed}), {n_true} true stroke kinds. Units: degrees, deg^2."
         )
 
         st.step("segmentation scores")

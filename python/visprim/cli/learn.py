@@ -68,8 +68,9 @@ def _run_corpus(args: argparse.Namespace) -> int:
         corpus = (
             Corpus(data, resample=args.resample, **common.reader_options(args, allow_each=True))
             if data
-            # The lazy generated corpus is the "strokes" preset's (one trial at a time).
-            else GeneratedCorpus(args.subjects, args.stimuli, args.data_seed)
+            else GeneratedCorpus(
+                args.subjects, args.stimuli, args.data_seed, preset=args.data_preset
+            )
         )
     except ValueError as exc:
         raise common.CLIError(str(exc)) from None

@@ -52,10 +52,10 @@ def run(args: argparse.Namespace) -> int:
         st.step("reading the data")
         if args.data or args.generated:
             trials, _ = common.trials_and_source(args, common.model_period(model), lowpass)
-        elif model.training_source_:
+        elif model.provenance_.reproducible:
             try:
-                trials = common.load_source(model.training_source_, lowpass)
-            except (OSError, ValueError, common.CLIError) as exc:
+                trials = common.load_source(model.provenance_, lowpass)
+            except (OSError, ValueError, ArithmeticError, TypeError, common.CLIError) as exc:
                 log.warning(
                     "cannot read the training data again (%s); writing the model-only part "
                     "(give DATA for the trial figures)",

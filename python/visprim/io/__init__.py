@@ -503,6 +503,11 @@ _READ_OPTIONS = (
 )
 
 
+def read_option_names() -> tuple[str, ...]:
+    """Every keyword option of :func:`read_many` (``arm`` and those of :func:`read_pieces`)."""
+    return ("arm", *_READ_OPTIONS)
+
+
 def _check_options(options: Mapping[str, Any]) -> None:
     """Argument checks that do not depend on the file (ValueError naming the argument)."""
     check_gap_options(

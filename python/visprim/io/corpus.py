@@ -17,8 +17,9 @@ known once read). Items are read in order and the same item always gives the sam
 a corpus can be read several times, in any order (:meth:`LazyCorpus.read`), by several
 processes (corpora pickle as their description, not their data).
 
-Both kinds describe themselves as a ``source`` dict (:attr:`LazyCorpus.source`), the form
-:class:`~visprim.model.PrimitiveModel` records in ``training_source_``.
+Both kinds describe themselves as a :class:`~visprim.provenance.Provenance`
+(:attr:`LazyCorpus.provenance`), the record :class:`~visprim.model.PrimitiveModel` keeps in
+``provenance_``.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from visprim.provenance import Provenance
 from visprim.trial import EACH_ARM, Trial, split_arms
 
 __all__ = ["DEFAULT_CHUNK", "Corpus", "GeneratedCorpus", "LazyCorpus", "sample_items"]
@@ -54,8 +56,8 @@ class LazyCorpus:
         raise NotImplementedError
 
     @property
-    def source(self) -> dict[str, Any]:  # pragma: no cover - abstract
-        """How to get these trials again (``training_source_`` of a model)."""
+    def provenance(self) -> Provenance:  # pragma: no cover - abstract
+        """How to get these trials again (``provenance_`` of a model)."""
         raise NotImplementedError
 
     def _index(self, index: int) -> int:
@@ -107,8 +109,8 @@ class _Subset(LazyCorpus):
         return self.parent.read_item(self.indices[self._index(index)])
 
     @property
-    def source(self) -> dict[str, Any]:
-        return self.parent.source
+    def provenance(self) -> Provenance:
+        return self.parent.provenance
 
 
 def _check_size(size: int | None) -> int:
@@ -212,15 +214,11 @@ class Corpus(LazyCorpus):
         return []
 
     @property
-    def source(self) -> dict[str, Any]:
-        source: dict[str, Any] = {
-            "kind": "files",
-            "paths": [str(p.resolve()) for p in self.paths],
-            "resample": self.options.get("resample"),
-        }
+    def provenance(self) -> Provenance:
+        options = {k: v for k, v in self.options.items() if k != "resample"}
         if self.arm != "right":
-            source["options"] = {"arm": self.arm}
-        return source
+            options["arm"] = self.arm
+        return Provenance.recordings(self.paths, self.options.get("resample"), options)
 
 
 class GeneratedCorpus(LazyCorpus):
@@ -234,13 +232,20 @@ class GeneratedCorpus(LazyCorpus):
     """
 
     def __init__(
-        self, n_subjects: int = 11, n_stimuli: int = 20, seed: int = 0, **options: Any
+        self,
+        n_subjects: int = 11,
+        n_stimuli: int = 20,
+        seed: int = 0,
+        *,
+        preset: str = "paper",
+        **options: Any,
     ) -> None:
         from visprim.datasets import stimuli, subjects
 
         # Validate as the generator does (and fail now rather than in a worker).
-        self._subjects = subjects(n_subjects, seed)
-        self._stimuli = stimuli(n_stimuli, seed)
+        self._subjects = subjects(n_subjects, seed, preset)
+        self._stimuli = stimuli(n_stimuli, seed, preset)
+        self.preset = str(preset)
         if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
             raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
         self.n_subjects = int(n_subjects)
@@ -254,7 +259,7 @@ class GeneratedCorpus(LazyCorpus):
     def __repr__(self) -> str:
         return (
             f"GeneratedCorpus({self.n_subjects} subjects x {self.n_stimuli} stimuli, "
-            f"seed {self.seed})"
+            f"seed {self.seed}, preset {self.preset!r})"
         )
 
     def read_item(self, index: int) -> list[Trial]:
@@ -264,14 +269,10 @@ class GeneratedCorpus(LazyCorpus):
         return [generate_trial(self._subjects[s], self._stimuli[m], m, self.seed, **self.options)]
 
     @property
-    def source(self) -> dict[str, Any]:
-        return {
-            "kind": "generated",
-            "n_subjects": self.n_subjects,
-            "n_stimuli": self.n_stimuli,
-            "seed": self.seed,
-            **({"options": self.options} if self.options else {}),
-        }
+    def provenance(self) -> Provenance:
+        return Provenance.generated(
+            self.n_subjects, self.n_stimuli, self.seed, self.preset, **self.options
+        )
 
     def __getstate__(self) -> dict[str, Any]:
         # Ship the description, not the sampled subjects and stimuli.
@@ -279,11 +280,18 @@ class GeneratedCorpus(LazyCorpus):
             "n_subjects": self.n_subjects,
             "n_stimuli": self.n_stimuli,
             "seed": self.seed,
+            "preset": self.preset,
             "options": self.options,
         }
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__init__(state["n_subjects"], state["n_stimuli"], state["seed"], **state["options"])  # type: ignore[misc]
+        self.__init__(  # type: ignore[misc]
+            state["n_subjects"],
+            state["n_stimuli"],
+            state["seed"],
+            preset=state["preset"],
+            **state["options"],
+        )
 
 
 def as_lazy(data: Any) -> LazyCorpus | None:

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from visprim.accuracy import ErrorTables
 from visprim.classify import score_against_truth
 from visprim.model import PrimitiveModel
 from visprim.report import figures
@@ -173,30 +174,41 @@ def write_report(
         page.add("Comparison with the paper (Table 3)", _markdown_blocks(comparison))
 
     # Tables 1-3 ------------------------------------------------------------------
-    tables = tables_in_degrees(model.error_table())
-    md_all = []
-    table_html = []
-    for i, t in enumerate(tables, start=1):
-        md = out / f"table{i}.md"
-        csv = out / f"table{i}.csv"
-        md.write_text(t.to_markdown(), encoding="utf-8")
-        csv.write_text(t.to_csv(), encoding="utf-8")
-        rep.files += [md, csv]
-        md_all.append(t.to_markdown())
-        table_html.append(table(t, [("Markdown", md.name), ("CSV", csv.name)]))
-    all_md = out / "tables.md"
-    all_md.write_text("\n".join(md_all), encoding="utf-8")
-    rep.files.append(all_md)
-    page.add(
-        "Error analysis (Tables 1–3)",
-        paragraph(
-            "Mean squared error per segment vector (deg²) and the RMS angle error "
-            "sqrt(MSE / d) in degrees, as the paper reports it. Projection error = sum of the "
-            "dropped eigenvalues; total = projection + clustering (the residuals are "
-            "orthogonal)."
+    tables = _tables_in_degrees(model)
+    if tables is None:
+        rep.skipped.append("error tables: the model keeps no training vectors")
+        page.add(
+            "Error analysis (Tables 1–3)",
+            paragraph(
+                "Error tables are not available: this model keeps no training vectors (it "
+                "was learned with --stream or --dask, or saved without them). Learn it in "
+                "memory for Tables 1–3; the other figures are drawn below."
+            ),
         )
-        + "".join(table_html),
-    )
+    else:
+        md_all = []
+        table_html = []
+        for i, t in enumerate(tables, start=1):
+            md = out / f"table{i}.md"
+            csv = out / f"table{i}.csv"
+            md.write_text(t.to_markdown(), encoding="utf-8")
+            csv.write_text(t.to_csv(), encoding="utf-8")
+            rep.files += [md, csv]
+            md_all.append(t.to_markdown())
+            table_html.append(table(t, [("Markdown", md.name), ("CSV", csv.name)]))
+        all_md = out / "tables.md"
+        all_md.write_text("\n".join(md_all), encoding="utf-8")
+        rep.files.append(all_md)
+        page.add(
+            "Error analysis (Tables 1–3)",
+            paragraph(
+                "Mean squared error per segment vector (deg²) and the RMS angle error "
+                "sqrt(MSE / d) in degrees, as the paper reports it. Projection error = sum of the "
+                "dropped eigenvalues; total = projection + clustering (the residuals are "
+                "orthogonal)."
+            )
+            + "".join(table_html),
+        )
     for heading, text in extra_sections:
         page.add(heading, pre(text))
 
@@ -439,24 +451,18 @@ def _relative(path: str | Path, out: Path) -> str:
         return p.as_posix()
 
 
+def _tables_in_degrees(model: PrimitiveModel) -> ErrorTables | None:
+    """Tables 1-3 of ``model`` in degrees, or None when it has no training vectors and no
+    saved tables."""
+    if getattr(model, "training_vectors_", None) is None and not getattr(
+        model, "error_tables_", None
+    ):
+        return None
+    return tables_in_degrees(model.error_table())
+
+
 def _provenance(model: PrimitiveModel, trials: Sequence[Trial] | None) -> str:
-    src = dict(model.training_source_ or {})
-    kind = src.get("kind")
-    if kind == "generated":
-        text = (
-            f"Generated imitation experiment (visprim.datasets, preset "
-            f"{src.get('preset', 'strokes')!r}): {src.get('n_subjects')} subjects × "
-            f"{src.get('n_stimuli')} stimuli, seed {src.get('seed')}; four sensors every "
-            "34 ms."
-        )
-    elif kind == "files":
-        paths = list(src.get("paths", []))
-        period = src.get("resample")
-        rs = f"resampled to {1000 * float(period):.0f} ms frames" if period else "file rates"
-        shown = ", ".join(paths[:5]) + (f" and {len(paths) - 5} more" if len(paths) > 5 else "")
-        text = f"Recordings: {shown} ({rs})."
-    else:
-        text = "Source not recorded in the model."
+    text = model.provenance_.describe()
     if trials:
         periods = [float(np.median(np.diff(t.times))) for t in trials if t.times.size > 1]
         text += (
