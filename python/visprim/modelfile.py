@@ -47,6 +47,7 @@ import math
 import os
 import re
 import secrets
+import stat
 import zipfile
 import zlib
 from collections.abc import Mapping
@@ -77,6 +78,9 @@ OPTIONAL_ARRAYS = ("training_vectors",)
 _DTYPES = {"<f8", "<i8"}
 #: Largest header accepted (bytes); real headers are a few kB (plus trial names).
 MAX_HEADER_BYTES = 64 * 2**20
+#: Largest model file accepted (bytes): the training vectors of 500,000 segments of 1,200
+#: dimensions fit.
+MAX_MODEL_BYTES = 8 * 2**30
 
 
 class ModelFileError(ValueError):
@@ -420,6 +424,18 @@ def _open(path: Path):  # type: ignore[no-untyped-def]
     if not path.exists():
         raise FileNotFoundError(f"model file {path} does not exist")
     try:
+        info = path.stat()
+    except OSError as exc:
+        raise _fail(path, f"cannot read the model file ({exc.strerror or exc})") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise _fail(path, "not a regular file (a device, pipe or folder), not a model file")
+    if info.st_size > MAX_MODEL_BYTES:
+        raise _fail(
+            path,
+            f"{info.st_size} bytes, larger than a model file may be "
+            f"({MAX_MODEL_BYTES // 2**30} GiB)",
+        )
+    try:
         zf = zipfile.ZipFile(path)
     except (zipfile.BadZipFile, OSError, EOFError, ValueError) as exc:
         raise _fail(
@@ -489,7 +505,12 @@ def check_shapes(path: Path, arrays: Mapping[str, NDArray[Any]]) -> None:
         )
         and (vectors is None or vectors.shape == (n, d))
         and (n == 0 or (labels.min() >= 0 and labels.max() < k))
-        and (n == 0 or arrays["segment_trial"].min() >= 0)
+        # Trial indices, or -1 throughout for a model fitted on bare vectors.
+        and (
+            n == 0
+            or arrays["segment_trial"].min() >= 0
+            or bool(np.all(arrays["segment_trial"] == -1))
+        )
     )
     if not consistent:
         raise _fail(path, "damaged model file: array shapes are inconsistent")

@@ -127,8 +127,9 @@ class Provenance:
     @classmethod
     def trials(cls, trials: Sequence[Any]) -> Provenance:
         """Trials handed to ``fit`` in memory: their common frame period, if they share one."""
-        periods = {round(float(t.frame_period), 12) for t in trials if t.n_frames > 1}
-        return cls(kind="trials", frame_period=periods.pop() if len(periods) == 1 else None)
+        periods = sorted(float(t.frame_period) for t in trials if t.n_frames > 1)
+        common = bool(periods) and periods[-1] <= periods[0] * 1.01  # jittered clocks agree
+        return cls(kind="trials", frame_period=periods[len(periods) // 2] if common else None)
 
     # ------------------------------------------------------------------ (de)serialising
 
