@@ -8,7 +8,7 @@ import pytest
 from visprim import PrimitiveModel
 from visprim.cli.main import main
 from visprim.datasets import imitation_experiment
-from visprim.markers_csv import write_marker_csv
+from visprim.io.markers_csv import write_marker_csv
 
 
 @pytest.fixture(scope="module")

@@ -241,12 +241,3 @@ def test_cli_generate_writes_readable_files(tmp_path: Path, capsys: pytest.Captu
         assert np.abs(back.markers - ref.markers).max() <= 0.5e-5 + 1e-12
         assert np.array_equal(back.truth.boundaries, ref.truth.boundaries)
         assert back.repetitions == ref.repetitions
-
-
-def test_the_old_module_path_is_an_alias() -> None:
-    import visprim.io.markers_csv as new
-    import visprim.markers_csv as old
-
-    assert old.read_marker_csv is new.read_marker_csv
-    assert old.write_marker_csv is new.write_marker_csv
-    assert old.MarkerCSVError is new.MarkerCSVError

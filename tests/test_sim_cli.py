@@ -89,7 +89,7 @@ def test_simulate_learned_model_primitives_and_movement(tmp_path, capsys) -> Non
     datasets = pytest.importorskip("visprim.datasets")
     from visprim import PrimitiveModel
     from visprim.imitate import imitate
-    from visprim.markers_csv import write_marker_csv
+    from visprim.io.markers_csv import write_marker_csv
 
     trials = datasets.imitation_experiment(n_subjects=2, n_stimuli=4, seed=0)
     model = PrimitiveModel(n_components=8, n_clusters=5, n_init=2).fit(trials[1:])

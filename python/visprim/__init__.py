@@ -36,16 +36,45 @@ def _version() -> str:
 
 __version__: str = _version()
 
-__all__ = ["JOINT_NAMES", "MARKER_NAMES", "PrimitiveModel", "Trial", "Truth", "__version__"]
+#: Names loaded on first use (module that defines each): ``import visprim`` stays light
+#: (numpy only), and ``from visprim import PrimitiveModel`` loads the pipeline then.
+_LAZY: dict[str, str] = {
+    "PrimitiveModel": "visprim.model",
+    "MotionClassifier": "visprim.classify",
+    "DTWClassifier": "visprim.classify",
+    "read": "visprim.io",
+    "read_many": "visprim.io",
+}
+
+__all__ = [
+    "JOINT_NAMES",
+    "MARKER_NAMES",
+    "DTWClassifier",
+    "MotionClassifier",
+    "PrimitiveModel",
+    "Trial",
+    "Truth",
+    "__version__",
+    "read",
+    "read_many",
+]
 
 if TYPE_CHECKING:
+    from visprim.classify import DTWClassifier, MotionClassifier
+    from visprim.io import read, read_many
     from visprim.model import PrimitiveModel
 
 
 def __getattr__(name: str) -> Any:
-    # The model pulls in the pipeline; keep `import visprim` light.
-    if name == "PrimitiveModel":
-        from visprim.model import PrimitiveModel
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'visprim' has no attribute {name!r}")
+    import importlib
 
-        return PrimitiveModel
-    raise AttributeError(f"module 'visprim' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))

@@ -248,10 +248,10 @@ def export_experiment(
 ) -> list[Path]:
     """Write the experiment as marker CSV files (one per trial) with truth sidecars.
 
-    Writes ``out_dir/<name>.csv`` (see :mod:`visprim.markers_csv`) and
+    Writes ``out_dir/<name>.csv`` (see :mod:`visprim.io.markers_csv`) and
     ``out_dir/<name>.truth.json`` per trial; returns the CSV paths in trial order.
     """
-    from visprim.markers_csv import write_marker_csv
+    from visprim.io.markers_csv import write_marker_csv
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
