@@ -275,7 +275,7 @@ def test_a_killed_save_leaves_a_temporary_file_that_the_next_save_removes(tmp_pa
     left = [p.name for p in tmp_path.iterdir()]
     assert len(left) == 1 and left[0].startswith(".model.npz.") and left[0].endswith(".tmp")
     # Another writer's temporary file that is still running is left alone.
-    alive = tmp_path / f".model.npz.{os.getppid()}.{'0' * 16}.tmp"
+    alive = tmp_path / f".model.npz.visprim-tmp-{os.getppid()}-{'0' * 8}.tmp"
     alive.write_bytes(b"in progress")
     fitted().save(target, include_vectors=False)
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(["model.npz", alive.name])

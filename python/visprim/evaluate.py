@@ -46,7 +46,6 @@ import html
 import io
 import os
 import re
-import tempfile
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -58,6 +57,7 @@ from numpy.typing import NDArray
 
 from visprim import kernels
 from visprim.accuracy import angular_error_deg
+from visprim.atomic import write_text
 from visprim.classify import MotionClassifier, arm_directions, dtw_matrix
 from visprim.features import direction_rms_deg
 from visprim.io import BANDAI_NAME, FORMATS
@@ -762,18 +762,6 @@ def _inline(text: str) -> str:
     return re.sub(r"\*\*(.+?)\*\*", r"<b>\1</b>", html.escape(text))
 
 
-def _write_atomic(path: Path, text: str) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
-
-
 def write_report(
     results: Sequence[BenchmarkResult], notes: Sequence[str], out_dir: str | os.PathLike[str]
 ) -> dict[str, Path]:
@@ -801,8 +789,8 @@ def write_report(
         "predictions": out / "predictions.csv",
         "html": out / "evaluate.html",
     }
-    _write_atomic(paths["markdown"], md)
-    _write_atomic(paths["summary"], buf.getvalue())
-    _write_atomic(paths["predictions"], pbuf.getvalue())
-    _write_atomic(paths["html"], to_html(md))
+    write_text(paths["markdown"], md, newline="")
+    write_text(paths["summary"], buf.getvalue(), newline="")
+    write_text(paths["predictions"], pbuf.getvalue(), newline="")
+    write_text(paths["html"], to_html(md), newline="")
     return paths

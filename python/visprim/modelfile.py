@@ -27,10 +27,11 @@ A NumPy ``.npz`` (zip) archive of ``.npy`` members (never pickles), with these m
 ``primitive_durations`` (k,) seconds; ``training_vectors`` (N, d) radians (written by
 default, so that a loaded model computes error tables like a fitted one).
 
-Writing is atomic: the archive goes to a temporary file ``.<name>.<pid>.<random>.tmp`` in
-the target's folder, is flushed to disk, given the mode a new file gets under the umask,
-then renamed over the target (:func:`os.replace`). Temporary files left by a writer that was
-killed (its process no longer exists) are removed by the next save to the same target.
+Writing is atomic (:func:`visprim.atomic.atomic_file`): the archive goes to a temporary
+file ``.<name>.visprim-tmp-<pid>-<random>.tmp`` in the target's folder, is flushed to disk,
+given the mode a new file gets under the umask, then renamed over the target
+(:func:`os.replace`). Temporary files left by a writer that was killed (its process no
+longer exists) are removed by the next save to the same target.
 
 Reading refuses another ``format``/``format_version`` and any damaged file (bad zip,
 missing member, a header of the wrong structure, checksum or shape mismatch) with
@@ -44,9 +45,6 @@ import contextlib
 import hashlib
 import json
 import math
-import os
-import re
-import secrets
 import stat
 import zipfile
 import zlib
@@ -58,6 +56,8 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from visprim.atomic import atomic_file
 
 FORMAT = "visprim.PrimitiveModel"
 FORMAT_VERSION = 2
@@ -134,40 +134,6 @@ def jsonable(v: Any) -> Any:
     return v
 
 
-def _umask_mode() -> int:
-    """The mode a new regular file gets here (0o666 minus the process umask)."""
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return 0o666 & ~mask
-
-
-_TMP = re.compile(r"^\.(?P<name>.+)\.(?P<pid>\d+)\.[0-9a-f]{16}\.tmp$")
-
-
-def _remove_stale_temporaries(folder: Path, name: str) -> None:
-    """Delete ``.<name>.<pid>.<random>.tmp`` files whose writer process is gone."""
-    try:
-        entries = list(folder.iterdir())
-    except OSError:
-        return
-    for entry in entries:
-        m = _TMP.match(entry.name)
-        if m is None or m["name"] != name:
-            continue
-        pid = int(m["pid"])
-        if pid == os.getpid():
-            continue
-        try:
-            os.kill(pid, 0)
-            continue  # the writer still runs
-        except ProcessLookupError:
-            pass
-        except (PermissionError, OverflowError, OSError):
-            continue  # alive under another user, or unknowable: leave it
-        with contextlib.suppress(OSError):
-            entry.unlink()
-
-
 def write_model_file(
     path: str | PathLike[str], header: Mapping[str, Any], arrays: Mapping[str, NDArray[Any]]
 ) -> Path:
@@ -204,22 +170,9 @@ def write_model_file(
     }
     full["header_sha256"] = hashlib.sha256(_canonical(full)).hexdigest()
     blob = np.frombuffer(json.dumps(full, indent=1).encode("utf-8"), dtype=np.uint8)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    _remove_stale_temporaries(path.parent, path.name)
-    tmp = path.parent / f".{path.name}.{os.getpid()}.{secrets.token_hex(8)}.tmp"
-    try:
-        fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
-        with os.fdopen(fd, "wb") as fh:
-            savez: Any = np.savez  # (numpy's stub types **kwds as its keyword options)
-            savez(fh, header=blob, **members)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, _umask_mode())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+    with atomic_file(path, suffix=".tmp") as tmp, open(tmp, "xb") as fh:
+        savez: Any = np.savez  # (numpy's stub types **kwds as its keyword options)
+        savez(fh, header=blob, **members)
     return path
 
 

@@ -127,6 +127,9 @@ class Provenance:
     @classmethod
     def trials(cls, trials: Sequence[Any]) -> Provenance:
         """Trials handed to ``fit`` in memory: their common frame period, if they share one."""
+        nominal = {t.meta.get("frame_period_s") for t in trials}  # the generator's clock
+        if len(nominal) == 1 and _is_number(next(iter(nominal))):
+            return cls(kind="trials", frame_period=float(nominal.pop()))
         periods = sorted(float(t.frame_period) for t in trials if t.n_frames > 1)
         common = bool(periods) and periods[-1] <= periods[0] * 1.01  # jittered clocks agree
         return cls(kind="trials", frame_period=periods[len(periods) // 2] if common else None)

@@ -17,19 +17,27 @@ from __future__ import annotations
 
 import contextlib
 import os
-import re
-import secrets
-import shutil
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
+from visprim.atomic import atomic_file, remove_stale
+from visprim.atomic import atomic_folder as _atomic_folder
 from visprim.cli.common import UsageError
+
+__all__ = [
+    "MARKER",
+    "atomic_file",
+    "atomic_folder",
+    "check_file",
+    "check_folder",
+    "moved",
+    "remove_stale",
+]
 
 #: File naming the command that wrote an output folder.
 MARKER = ".visprim-output"
 #: Extensions that make a new ``--out`` folder look like a file name (a likely mistake).
 _FILE_SUFFIXES = {".html", ".htm", ".png", ".gif", ".pdf", ".csv", ".md", ".npz", ".txt"}
-_TEMP = re.compile(r"^\.(?P<name>.+)\.visprim-(?:tmp|old)-(?P<pid>\d+)-[0-9a-f]+(?:\..*)?$")
 
 
 def _first_existing_parent(path: Path) -> Path:
@@ -110,86 +118,12 @@ def check_folder(
     return p
 
 
-def _hidden(target: Path, kind: str, suffix: str = "") -> Path:
-    token = secrets.token_hex(4)
-    return target.parent / f".{target.name}.visprim-{kind}-{os.getpid()}-{token}{suffix}"
-
-
-def _remove(path: Path) -> None:
-    if path.is_dir() and not path.is_symlink():
-        shutil.rmtree(path, ignore_errors=True)
-    else:
-        with contextlib.suppress(OSError):
-            path.unlink()
-
-
-def remove_stale(target: Path) -> None:
-    """Remove hidden temporaries of ``target`` left by killed runs (whose process is gone)."""
-    parent = target.parent if str(target.parent) else Path(".")
-    if not parent.is_dir():
-        return
-    for entry in parent.iterdir():
-        m = _TEMP.match(entry.name)
-        if m is None or m["name"] != target.name:
-            continue
-        pid = int(m["pid"])
-        if pid != os.getpid() and _alive(pid):
-            continue
-        _remove(entry)
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
-@contextlib.contextmanager
-def atomic_file(path: str | os.PathLike[str]) -> Iterator[Path]:
-    """Yield a temporary path to write; on success it replaces ``path`` in one rename."""
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    remove_stale(target)
-    tmp = _hidden(target, "tmp", target.suffix)
-    try:
-        yield tmp
-        if not tmp.is_file():
-            raise RuntimeError(f"nothing was written for {target}")
-        with open(tmp, "rb") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp, target)
-    finally:
-        _remove(tmp)
-
-
 @contextlib.contextmanager
 def atomic_folder(path: str | os.PathLike[str], command: str) -> Iterator[Path]:
-    """Yield a new hidden folder to fill; on success it replaces the folder ``path``.
-
-    The swap is two renames (old folder → hidden, new → ``path``) and then the removal of
-    the old one: an interruption leaves the previous complete output, or none.
-    """
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    remove_stale(target)
-    tmp = _hidden(target, "tmp")
-    tmp.mkdir()
-    try:
+    """:func:`visprim.atomic.atomic_folder` marked as written by visprim ``command``
+    (:data:`MARKER`)."""
+    with _atomic_folder(path, (MARKER, f"written by visprim {command}\n")) as tmp:
         yield tmp
-        (tmp / MARKER).write_text(f"written by visprim {command}\n", encoding="utf-8")
-        old = None
-        if target.exists():
-            old = _hidden(target, "old")
-            os.rename(target, old)
-        os.rename(tmp, target)
-        if old is not None:
-            _remove(old)
-    finally:
-        _remove(tmp)
 
 
 def moved(path: Path, tmp: Path, target: Path) -> Path:

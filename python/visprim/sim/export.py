@@ -37,9 +37,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
+from visprim.atomic import write_text
 from visprim.sim.model import LINKS, build_skeleton
 from visprim.sim.sequencer import angles_to_positions
-from visprim.sim.urdf import BALL_EULER, urdf_joint_names, write_text_atomic
+from visprim.sim.urdf import BALL_EULER, urdf_joint_names
 
 #: Half-step (s) of the central differences giving the velocities.
 VELOCITY_STEP_S = 1e-4
@@ -94,8 +95,8 @@ class JointTrajectory:
         base = Path(stem)
         base.parent.mkdir(parents=True, exist_ok=True)
         js, cs = base.with_suffix(".json"), base.with_suffix(".csv")
-        write_text_atomic(js, self.to_json())
-        write_text_atomic(cs, self.to_csv())
+        write_text(js, self.to_json())
+        write_text(cs, self.to_csv())
         return js, cs
 
 

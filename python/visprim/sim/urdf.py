@@ -25,7 +25,6 @@ the column order of the trajectory exports (:mod:`visprim.sim.export`).
 from __future__ import annotations
 
 import os
-import tempfile
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Literal
@@ -33,6 +32,7 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from visprim.atomic import write_text
 from visprim.sim.model import DENSITY, LINKS, LinkSpec, ShapeSpec, composite_inertia
 
 #: Axes (child frame) and name suffixes of the three joints replacing a ball joint, in order.
@@ -203,20 +203,8 @@ def write_robot_file(
         raise ValueError(f"{out}: {what} file name must end in {suffix}")
     text = make()
     out.parent.mkdir(parents=True, exist_ok=True)
-    write_text_atomic(out, text)
+    write_text(out, text)
     return out
-
-
-def write_text_atomic(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` through a temporary file renamed over it."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def mass_table(skeleton: object) -> dict[str, tuple[float, np.ndarray, np.ndarray]]:

@@ -14,13 +14,13 @@ under a temporary name in the target's folder and renamed over the target at the
 
 from __future__ import annotations
 
-import os
-import tempfile
 from collections.abc import Iterable
 from pathlib import Path
 
 import numpy as np
 from PIL import Image
+
+from visprim.atomic import atomic_file
 
 #: Supported extensions → what writes them.
 VIDEO_FORMATS: dict[str, str] = {".gif": "Pillow", ".mp4": "imageio-ffmpeg (visprim[video])"}
@@ -105,17 +105,9 @@ def write_video(path: str | Path, frames: Iterable[Image.Image], fps: float) -> 
     out = check_video_path(path)
     if not (np.isfinite(fps) and fps > 0):
         raise ValueError(f"fps must be > 0 Hz, got {fps}")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{out.stem}.", suffix=out.suffix, dir=out.parent)
-    os.close(fd)
-    tmp = Path(name)
-    try:
+    with atomic_file(out) as tmp:
         if out.suffix.lower() == ".gif":
             _gif(tmp, frames, float(fps))
         else:
             _mp4(tmp, frames, float(fps))
-        os.replace(tmp, out)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
     return out
