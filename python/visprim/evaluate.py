@@ -42,10 +42,8 @@ Every number is computed on held-out groups: nothing is tuned on the group being
 from __future__ import annotations
 
 import csv
-import html
 import io
 import os
-import re
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -717,36 +715,11 @@ def to_markdown(results: Sequence[BenchmarkResult], notes: Sequence[str] = ()) -
 
 
 def to_html(markdown: str) -> str:
-    """A short self-contained HTML page of the markdown report (tables, headings, lists)."""
-    body = []
-    in_table = False
-    for line in markdown.splitlines():
-        if line.startswith("|"):
-            cells = [c.strip() for c in line.strip("|").split("|")]
-            if all(set(c) <= {"-"} for c in cells):
-                continue
-            if not in_table:
-                body.append("<table>")
-                in_table = True
-                tag = "th"
-            else:
-                tag = "td"
-            row = "".join(f"<{tag}>{_inline(c)}</{tag}>" for c in cells)
-            body.append(f"<tr>{row}</tr>")
-            continue
-        if in_table:
-            body.append("</table>")
-            in_table = False
-        if line.startswith("## "):
-            body.append(f"<h2>{html.escape(line[3:])}</h2>")
-        elif line.startswith("# "):
-            body.append(f"<h1>{html.escape(line[2:])}</h1>")
-        elif line.startswith("- "):
-            body.append(f"<p>• {_inline(line[2:])}</p>")
-        elif line.strip():
-            body.append(f"<p>{_inline(line)}</p>")
-    if in_table:
-        body.append("</table>")
+    """A short self-contained HTML page of the markdown report (tables, headings, lists;
+    :func:`visprim.report.html.markdown_to_html`)."""
+    from visprim.report.html import markdown_to_html
+
+    body = [markdown_to_html(markdown)]
     style = (
         "body{font-family:sans-serif;max-width:70em;margin:2em auto}"
         "table{border-collapse:collapse;margin:1em 0}"
@@ -756,10 +729,6 @@ def to_html(markdown: str) -> str:
         "<!doctype html><html><head><meta charset='utf-8'><title>visprim evaluate</title>"
         f"<style>{style}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n"
     )
-
-
-def _inline(text: str) -> str:
-    return re.sub(r"\*\*(.+?)\*\*", r"<b>\1</b>", html.escape(text))
 
 
 def write_report(

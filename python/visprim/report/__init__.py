@@ -27,7 +27,15 @@ from visprim.accuracy import ErrorTables
 from visprim.classify import score_against_truth
 from visprim.model import PrimitiveModel
 from visprim.report import figures
-from visprim.report.html import Page, figure, markdown_table, paragraph, pre, table
+from visprim.report.html import (
+    Page,
+    figure,
+    markdown_table,
+    markdown_to_html,
+    paragraph,
+    pre,
+    table,
+)
 from visprim.report.paper import tables_in_degrees
 from visprim.segment import corpus_boundary_scores, truth_pause_halfwidths, zvc
 from visprim.trial import Trial
@@ -428,13 +436,7 @@ def _trial_figures(
 
 def _markdown_blocks(text: str) -> str:
     """Blank-line separated blocks: pipe tables as HTML tables, anything else as text."""
-    out = []
-    for block in text.strip().split("\n\n"):
-        if block.lstrip().startswith("|"):
-            out.append(markdown_table(block))
-        elif block.strip():
-            out.append(paragraph(" ".join(block.split())))
-    return "".join(out)
+    return markdown_to_html(text)
 
 
 def html_escape(text: str) -> str:

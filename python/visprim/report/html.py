@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import html
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -85,18 +86,66 @@ def figure(src: str, caption: str) -> str:
     )
 
 
-def markdown_table(text: str) -> str:
-    """A simple pipe-delimited Markdown table (header, rule, rows) as an HTML table."""
-    rows = [ln.strip().strip("|").split("|") for ln in text.strip().splitlines() if "|" in ln]
-    rows = [r for r in rows if not all(set(c.strip()) <= set("-:") for c in r)]
-    if not rows:
-        return ""
-    head = "".join(f"<th>{html.escape(c.strip())}</th>" for c in rows[0])
+def _inline(text: str) -> str:
+    """Escaped text with Markdown's ``**bold**``."""
+    return re.sub(r"\*\*(.+?)\*\*", r"<b>\1</b>", html.escape(text))
+
+
+def _table_html(rows: Sequence[Sequence[str]]) -> str:
+    head = "".join(f"<th>{_inline(c)}</th>" for c in rows[0])
     body = "".join(
-        "<tr>" + "".join(f"<td>{html.escape(c.strip())}</td>" for c in r) + "</tr>"
-        for r in rows[1:]
+        "<tr>" + "".join(f"<td>{_inline(c)}</td>" for c in r) + "</tr>" for r in rows[1:]
     )
     return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def markdown_to_html(text: str) -> str:
+    """The Markdown visprim writes as an HTML fragment (every text escaped): ``#``/``##``
+    headings, ``- `` items, pipe tables (header, rule, rows), paragraphs (blank-line
+    separated) and ``**bold**``. The one converter of the report, the demo's comparison and
+    ``evaluate.html``."""
+    out: list[str] = []
+    rows: list[list[str]] = []
+    para: list[str] = []
+
+    def flush() -> None:
+        if rows:
+            out.append(_table_html(rows))
+            rows.clear()
+        if para:
+            out.append(f"<p>{_inline(' '.join(para))}</p>")
+            para.clear()
+
+    for line in text.splitlines():
+        s = line.strip()
+        if s.startswith("|"):
+            if para:
+                flush()
+            cells = [c.strip() for c in s.strip("|").split("|")]
+            if not all(c and set(c) <= set("-:") for c in cells):
+                rows.append(cells)
+            continue
+        if rows:
+            flush()
+        if not s:
+            flush()
+        elif s.startswith("## ") or s.startswith("# ") or s.startswith("- "):
+            flush()
+            if s.startswith("- "):
+                out.append(f"<p>• {_inline(s[2:])}</p>")
+            else:
+                level = 2 if s.startswith("## ") else 1
+                out.append(f"<h{level}>{_inline(s[level + 1 :])}</h{level}>")
+        else:
+            para.append(s)
+    flush()
+    return "\n".join(out)
+
+
+def markdown_table(text: str) -> str:
+    """A pipe-delimited Markdown table (header, rule, rows) as an HTML table
+    (:func:`markdown_to_html`)."""
+    return markdown_to_html(text)
 
 
 def table(t: ErrorTable, links: Sequence[tuple[str, str]] = ()) -> str:
