@@ -346,6 +346,19 @@ class GroupCrossValidation:
         return "\n".join(lines)
 
 
+def group_folds(
+    groups: Sequence[Any] | NDArray[Any],
+) -> list[tuple[Any, NDArray[np.intp], NDArray[np.intp]]]:
+    """``(group, train indices, test indices)`` of each leave-one-group-out fold
+    (:class:`sklearn.model_selection.LeaveOneGroupOut`), in the order the groups first
+    appear. Needs at least two groups."""
+    from sklearn.model_selection import LeaveOneGroupOut
+
+    g = np.asarray(list(groups))
+    folds = {g[test[0]]: (train, test) for train, test in LeaveOneGroupOut().split(g, g, g)}
+    return [(grp, *folds[grp]) for grp in dict.fromkeys(g.tolist())]
+
+
 def leave_one_group_out(
     make_classifier: Callable[[], PrimitiveHistogramClassifier],
     trials: Sequence[Trial],
@@ -368,11 +381,9 @@ def leave_one_group_out(
     if len(order) < 2:
         raise ValueError("leave-one-group-out needs at least two groups")
     pred = np.empty(y.shape[0], dtype=y.dtype)
-    for group in order:
-        test = g == group
-        train = ~test
-        clf = make_classifier().fit([t for t, m in zip(trials, train, strict=True) if m], y[train])
-        pred[test] = clf.predict([t for t, m in zip(trials, test, strict=True) if m])
+    for _, train, test in group_folds(g):
+        clf = make_classifier().fit([trials[i] for i in train], list(y[train]))
+        pred[test] = clf.predict([trials[i] for i in test])
     per_group = {grp: float(np.mean(pred[g == grp] == y[g == grp])) for grp in order}
     return GroupCrossValidation(
         accuracy=float(np.mean(pred == y)),
@@ -865,11 +876,10 @@ class MotionClassifier(_NearestSequences):
 
 def _inner_accuracy(d: NDArray[np.float64], y: NDArray[Any], groups: NDArray[Any]) -> float:
     """1-NN accuracy when each group is held out in turn from the others (costs ``d``)."""
+    if np.unique(groups).size < 2:
+        return 0.0
     right = 0
-    for grp in np.unique(groups):
-        test = groups == grp
-        if test.all():
-            continue
-        sub = d[np.ix_(test, ~test)]
-        right += int(np.sum(y[~test][np.argmin(sub, axis=1)] == y[test]))
+    for _, train, test in group_folds(groups):
+        sub = d[np.ix_(test, train)]
+        right += int(np.sum(y[train][np.argmin(sub, axis=1)] == y[test]))
     return right / y.shape[0]

@@ -56,7 +56,7 @@ from numpy.typing import NDArray
 from visprim import kernels
 from visprim.accuracy import angular_error_deg
 from visprim.atomic import write_text
-from visprim.classify import MotionClassifier, arm_directions, dtw_matrix
+from visprim.classify import MotionClassifier, arm_directions, dtw_matrix, group_folds
 from visprim.features import direction_rms_deg
 from visprim.io import BANDAI_NAME, FORMATS
 from visprim.params import DEG2_PER_RAD2, STUDY_FRAME_PERIOD_S
@@ -309,11 +309,9 @@ def _choose_group(recordings: Sequence[Recording], group_by: str | None) -> str:
 
 
 def _confusion(classes: list[str], truth: NDArray[Any], pred: NDArray[Any]) -> NDArray[np.int64]:
-    index = {c: i for i, c in enumerate(classes)}
-    m = np.zeros((len(classes), len(classes)), dtype=np.int64)
-    for t, p in zip(truth, pred, strict=True):
-        m[index[t], index[p]] += 1
-    return m
+    from sklearn.metrics import confusion_matrix
+
+    return np.asarray(confusion_matrix(truth, pred, labels=classes), dtype=np.int64)
 
 
 def _total_error_sq(
@@ -379,11 +377,9 @@ def evaluate_benchmark(
     n_vec = {k: 0 for k in RECONSTRUCTION_K}
     rms: list[float] = []
     dims = [0]
-    for group in order:
+    for group, train, test in group_folds(g):
         if on_fold:
             on_fold(f"{bench.name}: {bench.group_by} {group or '-'}")
-        test = np.flatnonzero(g == group)
-        train = np.flatnonzero(g != group)
         t0 = time.perf_counter()
         base_pred[test] = y[train][np.argmin(d_all[np.ix_(test, train)], axis=1)]
         seconds["baseline"] += time.perf_counter() - t0

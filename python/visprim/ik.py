@@ -368,3 +368,24 @@ def _continuous(
         tk = t[sl]
         out[sl][~good] = np.interp(tk[~good], tk[good], out[sl][good])
     return out
+
+
+def human_arm_points(trial: Trial) -> NDArray[np.float64]:
+    """The recorded arm(s) as (T, 4 n_arms, 3) points in metres — shoulder, elbow, wrist,
+    finger of the right arm, then of the left for a two-arm trial — in body axes (+x
+    forward, +y left, +z up), each arm with its own shoulder at the origin."""
+    n_arms = trial.markers.shape[1] // 4
+    out = []
+    for arm in range(n_arms):
+        markers = trial.markers[:, 4 * arm : 4 * arm + 4]
+        joints = trial.joints
+        if joints is not None and joints.shape[1] >= 3 * (arm + 1):
+            centres = joints[:, 3 * arm : 3 * arm + 3]
+        else:
+            centres = implied_joint_centres(markers)
+        points = np.concatenate([centres, markers[:, 3:4]], axis=1)
+        out.append(points - points[:, :1])
+    rel = np.concatenate(out, axis=1)
+    if trial.body_frame is not None:
+        rel = np.einsum("tji,tpj->tpi", trial.body_frame, rel)  # v_B = Fᵀ v
+    return rel

@@ -55,6 +55,7 @@ from scipy.spatial.transform import Rotation
 
 from visprim.arm import ANGLE_NAMES, shoulder_rotation_body
 from visprim.features import direction_rms_deg
+from visprim.ik import human_arm_points
 from visprim.params import STUDY_FRAME_PERIOD_S
 from visprim.sim.joining import JoinedTrajectory
 from visprim.trial import Trial, split_arms
@@ -269,29 +270,6 @@ def _same_branch(
         for k in (c, c + 2):
             out[:, k] += 2 * np.pi * np.round((reference[:, k] - angles[:, k]) / (2 * np.pi))
     return out
-
-
-def human_arm_points(trial: Trial) -> NDArray[np.float64]:
-    """The recorded arm(s) as (T, 4 n_arms, 3) points in metres — shoulder, elbow, wrist,
-    finger of the right arm, then of the left for a two-arm trial — in body axes (+x
-    forward, +y left, +z up), each arm with its own shoulder at the origin."""
-    from visprim.ik import implied_joint_centres
-
-    n_arms = trial.markers.shape[1] // 4
-    out = []
-    for arm in range(n_arms):
-        markers = trial.markers[:, 4 * arm : 4 * arm + 4]
-        joints = trial.joints
-        if joints is not None and joints.shape[1] >= 3 * (arm + 1):
-            centres = joints[:, 3 * arm : 3 * arm + 3]
-        else:
-            centres = implied_joint_centres(markers)
-        points = np.concatenate([centres, markers[:, 3:4]], axis=1)
-        out.append(points - points[:, :1])
-    rel = np.concatenate(out, axis=1)
-    if trial.body_frame is not None:
-        rel = np.einsum("tji,tpj->tpi", trial.body_frame, rel)  # v_B = Fᵀ v
-    return rel
 
 
 def _uncovered(t0: float, t1: float, segments: NDArray[np.float64]) -> list[tuple[float, float]]:

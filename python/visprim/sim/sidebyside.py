@@ -62,7 +62,7 @@ class SideBySide:
         size: tuple[int, int] = (480, 480),
         camera: Camera | None = None,
     ) -> None:
-        from visprim.imitate import human_arm_points
+        from visprim.ik import human_arm_points
 
         if imitation.playback is None:
             raise ValueError("the imitation was not played on Adonis (play=False): no video")
