@@ -13,6 +13,8 @@ except ImportError:  # pragma: no cover - a source checkout without the install
     sys.path.insert(0, str(ROOT / "python"))
     import visprim
 
+sys.path.insert(0, str(Path(__file__).resolve().parent / "_ext"))
+
 project = "visprim"
 author = "The visprim developers"
 copyright = "2026, The visprim developers"
@@ -25,6 +27,7 @@ extensions = [
     "sphinx.ext.viewcode",
     "sphinx.ext.napoleon",  # the Google-style "Args:" docstrings of visprim.kernels
     "numpydoc",  # every other docstring
+    "cli_reference",  # docs/_ext: the command reference from visprim.cli's parsers
 ]
 napoleon_google_docstring = True
 napoleon_numpy_docstring = False
@@ -56,7 +59,7 @@ numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
 numpydoc_xref_param_type = False
 
-exclude_patterns = ["_build", "plot_generated_trial.py"]
+exclude_patterns = ["_build", "_ext", "plot_generated_trial.py"]
 html_theme = "alabaster"
 html_title = f"visprim {release}"
 html_static_path: list[str] = []
