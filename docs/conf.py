@@ -61,6 +61,10 @@ numpydoc_xref_param_type = False
 
 exclude_patterns = ["_build", "_ext", "plot_generated_trial.py"]
 html_theme = "alabaster"
+# Wide enough for the command usages and the measurement tables at 1280 px.
+html_theme_options = {"page_width": "1240px", "sidebar_width": "230px", "body_max_width": "none"}
+# Option names keep their two hyphens ("--out", not an en dash).
+smartquotes = False
 html_title = f"visprim {release}"
 html_static_path: list[str] = []
 nitpicky = False

@@ -56,10 +56,8 @@ def _help(action: argparse.Action) -> str:
 def _command_lines(name: str, parser: argparse.ArgumentParser, summary: str) -> list[str]:
     title = f"visprim {name}"
     lines = [f".. _cmd-{name}:", "", title, "-" * len(title), ""]
-    if summary:
-        lines += [f"*{_text(summary)}*", ""]
-    if parser.description:
-        lines += [_text(parser.description), ""]
+    if parser.description or summary:
+        lines += [_text(parser.description or summary), ""]
     usage = parser.format_usage().removeprefix("usage: ").rstrip()
     lines += [".. code-block:: text", ""] + ["   " + u for u in usage.splitlines()] + [""]
     for group in parser._action_groups:
@@ -71,11 +69,13 @@ def _command_lines(name: str, parser: argparse.ArgumentParser, summary: str) -> 
         )
         lines += [f".. rubric:: {_text(heading)}", ""]
         for action in actions:
-            lines += [f"``{_invocation(action)}``", f"   {_text(_help(action)) or '(no help)'}"]
-            if action.choices is not None and not isinstance(action.choices, dict):
+            help_text = _text(_help(action)) or "(no help)"
+            hidden = action.metavar is not None and action.option_strings
+            if hidden and action.choices is not None and not isinstance(action.choices, dict):
+                # The usage shows a metavar, not the choices: list them.
                 choices = ", ".join(f"``{c}``" for c in action.choices)
-                lines += [f"   Choices: {choices}."]
-            lines += [""]
+                help_text = f"{help_text.rstrip('.')}. One of {choices}."
+            lines += [f"``{_invocation(action)}``", f"   {help_text}", ""]
     return lines
 
 
