@@ -23,6 +23,7 @@ version = release
 
 extensions = [
     "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",  # the module tables of the API index (no generated pages)
     "sphinx.ext.mathjax",
     "sphinx.ext.viewcode",
     "sphinx.ext.napoleon",  # the Google-style "Args:" docstrings of visprim.kernels
@@ -59,6 +60,7 @@ numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
 numpydoc_xref_param_type = False
 
+autosummary_generate = False
 exclude_patterns = ["_build", "_ext", "plot_generated_trial.py"]
 html_theme = "alabaster"
 # Wide enough for the command usages and the measurement tables at 1280 px.
