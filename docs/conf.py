@@ -13,6 +13,8 @@ except ImportError:  # pragma: no cover - a source checkout without the install
     sys.path.insert(0, str(ROOT / "python"))
     import visprim
 
+sys.path.insert(0, str(Path(__file__).resolve().parent / "_ext"))
+
 project = "visprim"
 author = "The visprim developers"
 copyright = "2026, The visprim developers"
@@ -21,10 +23,12 @@ version = release
 
 extensions = [
     "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",  # the module tables of the API index (no generated pages)
     "sphinx.ext.mathjax",
     "sphinx.ext.viewcode",
     "sphinx.ext.napoleon",  # the Google-style "Args:" docstrings of visprim.kernels
     "numpydoc",  # every other docstring
+    "cli_reference",  # docs/_ext: the command reference from visprim.cli's parsers
 ]
 napoleon_google_docstring = True
 napoleon_numpy_docstring = False
@@ -56,8 +60,13 @@ numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
 numpydoc_xref_param_type = False
 
-exclude_patterns = ["_build", "plot_generated_trial.py"]
+autosummary_generate = False
+exclude_patterns = ["_build", "_ext", "plot_generated_trial.py"]
 html_theme = "alabaster"
+# Wide enough for the command usages and the measurement tables at 1280 px.
+html_theme_options = {"page_width": "1240px", "sidebar_width": "230px", "body_max_width": "none"}
+# Option names keep their two hyphens ("--out", not an en dash).
+smartquotes = False
 html_title = f"visprim {release}"
 html_static_path: list[str] = []
 nitpicky = False

@@ -78,13 +78,44 @@ def test_mypy_configuration():
 
 def test_ci_runs_tests_lint_and_docs():
     ci = text(".ci/run")
-    assert re.findall(r"(?m)^make (\w+)$", ci) == ["test", "lint", "docs"]
+    assert re.findall(r"(?m)^make ([\w-]+)$", ci) == ["test", "lint", "docs", "wheel-check"]
     makefile = text("Makefile")
     lint = re.search(r"(?ms)^lint:.*?(?=^\S)", makefile)
     docs = re.search(r"(?ms)^docs:.*?(?=^\S)", makefile)
     assert lint and "mypy" in lint.group(0) and "ruff check" in lint.group(0)
     assert docs and "sphinx -W" in docs.group(0)
     assert (REPO / "docs" / "conf.py").is_file()
+
+
+def test_wheel_check_uses_the_wheel_outside_the_tree():
+    makefile = text("Makefile")
+    check = re.search(r"(?ms)^wheel-check:.*?(?=^\S)", makefile)
+    assert check, "no wheel-check target"
+    recipe = check.group(0)
+    assert "wheel" in recipe.split(":", 1)[1].split("\n")[0] and ".ci/wheel-check" in recipe
+    script = text(".ci/wheel-check")
+    for needed in ("mktemp -d", "venv", "visprim --version", "visprim -q learn --generated"):
+        assert needed in script, needed
+    assert 'cd "$tmp/work"' in script  # run from outside the source tree
+
+
+def test_wheel_description_is_for_wheel_users():
+    readme = PYPROJECT["project"]["readme"]
+    assert readme != "README.md"
+    description = text(readme)
+    for absent in ("make ", "../shared", "benches/", "cargo "):
+        assert absent not in description, absent
+    for needed in ("authors", "classifiers", "keywords"):
+        assert PYPROJECT["project"][needed], needed
+
+
+def test_readme_opens_with_the_two_commands():
+    readme = text("README.md")
+    block = re.search(r"(?s)```\n(.*?)```", readme)
+    assert block and readme.index("```") < readme.index("\n## ")
+    commands = [line.split("#")[0].strip() for line in block.group(1).splitlines()]
+    assert commands == ["make demo", "make test"]
+    assert len(readme.splitlines()) <= 150
 
 
 def test_tests_folder_is_plain():
