@@ -82,8 +82,9 @@ class SideBySide:
             size,
             title=f"Adonis: {what} {seq if imitation.source == 'primitives' else ''}".strip(),
             footer=(
-                f"vs human {adonis['vs_human_joint_rms_deg']['overall']:.1f}°  "
-                f"vs rebuild {adonis['vs_rebuild_joint_rms_deg']['overall']:.1f}°  "
+                f"Adonis vs human, bone directions: {adonis['vs_human_direction_rms_deg']:.1f}° "
+                f"RMS (holding still: {m['headline']['still_posture_rms_deg']:.1f}°)\n"
+                f"Adonis vs its rebuild {adonis['vs_rebuild_joint_rms_deg']['overall']:.1f}°  "
                 f"time {adonis['time_ratio']:.2f}x  via {pb.n_reached}/{pb.n_via}"
             ),
         )
@@ -105,13 +106,13 @@ class SideBySide:
             for run in p.dash_runs(self.human_2d[:, 4 * a + 3], 6.0 * SUPERSAMPLE)
         ]
         w, h = size
-        rb = m["rebuild_vs_human_rms_deg"]["overall"]
+        rb = m["rebuild_vs_human_direction_rms_deg"]
         cov = m["coverage"]
         self.labels = [
             _Label(f"human: {imitation.name}", 11, "la", (4, 4), False),
             _Label(
-                f"rebuild vs human {rb:.1f}° RMS  uncovered {cov['uncovered_s']:.2f} s "
-                f"({cov['uncovered_percent']:.0f}%)",
+                f"rebuild vs human, bone directions: {rb:.1f}° RMS\n"
+                f"not in a segment: {cov['uncovered_s']:.2f} s ({cov['uncovered_percent']:.0f}%)",
                 9.5,
                 "md",
                 (w / 2, h - 3),
