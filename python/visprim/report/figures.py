@@ -573,3 +573,52 @@ def plot_reconstruction(
             title += f", primitive {ec:.2f}°"
     fig.suptitle(_wrap(title), x=0.02, ha="left", fontsize=11)
     return save_figure(fig, path)
+
+
+def confusion_figure(classes: Sequence[str], matrix: ArrayLike, title: str) -> Figure:
+    """A confusion matrix (rows: true class, columns: predicted), counts in the cells and
+    the colour the fraction of the row."""
+    m = np.asarray(matrix, dtype=np.float64)
+    n = len(classes)
+    rows = m.sum(axis=1, keepdims=True)
+    frac = np.divide(m, rows, out=np.zeros_like(m), where=rows > 0)
+    side = max(4.0, 0.45 * n + 2.5)
+    fig = Figure(figsize=(side + 1.0, side), layout="constrained")
+    ax = fig.subplots()
+    im = ax.imshow(frac, cmap="Blues", vmin=0.0, vmax=1.0)
+    for i in range(n):
+        for j in range(n):
+            if m[i, j]:
+                color = "white" if frac[i, j] > 0.6 else "black"
+                ax.text(j, i, f"{int(m[i, j])}", ha="center", va="center", fontsize=8, color=color)
+    ax.set_xticks(range(n), list(classes), rotation=60, ha="right", fontsize=8)
+    ax.set_yticks(range(n), list(classes), fontsize=8)
+    ax.set_xlabel("predicted class")
+    ax.set_ylabel("true class")
+    fig.colorbar(im, ax=ax, shrink=0.8, label="fraction of the true class")
+    fig.suptitle(_wrap(title, int(10 * (side + 1.0))), x=0.02, ha="left", fontsize=10)
+    return fig
+
+
+def group_accuracy_figure(
+    per_group: dict[str, tuple[float, float, int]], group_by: str, title: str
+) -> Figure:
+    """Accuracy on each held-out group: the MotionClassifier beside the DTW 1-NN baseline
+    (``per_group``: group → (accuracy, baseline accuracy, trials))."""
+    names = list(per_group)
+    acc = np.array([per_group[g][0] for g in names])
+    base = np.array([per_group[g][1] for g in names])
+    counts = [per_group[g][2] for g in names]
+    x = np.arange(len(names))
+    fig = Figure(figsize=(max(5.0, 0.6 * len(names) + 2.5), 3.8), layout="constrained")
+    ax = fig.subplots()
+    ax.bar(x - 0.2, 100 * acc, 0.4, color="tab:blue", label="MotionClassifier")
+    ax.bar(x + 0.2, 100 * base, 0.4, color="0.65", label="DTW 1-NN baseline")
+    ax.set_xticks(x, [f"{g or '-'}\n({n})" for g, n in zip(names, counts, strict=True)], fontsize=8)
+    ax.set_xlabel(f"held-out {group_by} (trials)")
+    ax.set_ylabel("accuracy (%)")
+    ax.set_ylim(0, 105)
+    ax.grid(alpha=0.3, axis="y")
+    fig.legend(loc="outside lower center", ncols=2, fontsize=8, frameon=False)
+    fig.suptitle(_wrap(title, 80), x=0.02, ha="left", fontsize=10)
+    return fig
