@@ -107,15 +107,42 @@ def format_segmentation_scores(scores: dict[str, tuple[float, float, float]]) ->
     return "\n".join(lines) + "\n"
 
 
-def _pick_trial(corpus_names: list[str], counts: np.ndarray, name: str | None) -> int:
+def _pick_trial(
+    corpus_names: list[str],
+    counts: np.ndarray,
+    name: str | None,
+    mixed: np.ndarray | None = None,
+) -> int:
     if name is not None:
         if name not in corpus_names:
             raise ValueError(f"report: no trial named {name!r} among the {len(corpus_names)} given")
         return corpus_names.index(name)
     # An example with several segments (deterministic): the first trial with 4 to 8 SEG-2
-    # segments, else the one with the most.
-    good = np.flatnonzero((counts >= 4) & (counts <= 8))
-    return int(good[0]) if good.size else int(np.argmax(counts))
+    # segments whose Fig. 5 shows both SEG-1 segments and frames outside them (``mixed``),
+    # else the first with 4 to 8 SEG-2 segments, else the one with the most.
+    good = (counts >= 4) & (counts <= 8)
+    if mixed is not None and np.any(good & mixed):
+        return int(np.flatnonzero(good & mixed)[0])
+    if np.any(good):
+        return int(np.flatnonzero(good)[0])
+    return int(np.argmax(counts))
+
+
+#: Fig. 5 shows "both kinds" when SEG-1 segments cover at least one frame and at most this
+#: share of the trial.
+MIXED_MAX_COVER = 0.9
+
+
+def _seg1_mixed(model: PrimitiveModel, trials: list[Trial]) -> np.ndarray:
+    """Per trial: whether SEG-1 (with the model's settings) finds a segment and leaves part
+    of the trial outside its segments, so that Fig. 5 has coloured and grey parts."""
+    corpus = model.prepare(trials, segmentation="seg1")
+    out = np.zeros(len(trials), dtype=bool)
+    for i, (t, segs) in enumerate(zip(corpus.times, corpus.segments, strict=True)):
+        span = float(t[-1] - t[0]) if t.size > 1 else 0.0
+        if segs.shape[0] and span > 0:
+            out[i] = float(np.sum(segs[:, 1] - segs[:, 0])) <= MIXED_MAX_COVER * span
+    return out
 
 
 def write_report(
@@ -278,7 +305,11 @@ def write_report(
         )
         page.add(
             "Primitives on the simulated humanoid",
-            paragraph("Primitives played back on Adonis (DART simulation).")
+            paragraph(
+                "Primitives played back on Adonis (DART simulation): by default the ones "
+                "whose upper arm and forearm travel furthest (the bones' path length, in "
+                "the titles), not the most populated, which are near rest."
+            )
             + f'<div class="gifs">{imgs}</div>',
         )
 
@@ -326,7 +357,8 @@ def _trial_figures(
     if counts is None:
         # Count SEG-2 segments for the choice of the example trial.
         counts = model.prepare(trials, segmentation="seg2").segmentation.counts()
-    i = _pick_trial(corpus.names, counts, trial_name)
+    mixed = _seg1_mixed(model, trials) if trial_name is None else None
+    i = _pick_trial(corpus.names, counts, trial_name, mixed)
     trial = trials[i]
     times = corpus.times[i]
     angles = corpus.angles[i]

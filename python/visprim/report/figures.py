@@ -208,17 +208,18 @@ def plot_segmentation(
         ax.grid(alpha=0.3)
     axes[-1].set_xlabel("time (s)")
     handles = [
-        axes[0].plot([], [], color="tab:blue", lw=1.8)[0],
-        axes[0].plot([], [], "|", ms=12, mew=2.0, color="k")[0],
         axes[0].plot([], [], "o", mfc="white", mec="0.3", ms=4)[0],
         axes[0].plot([], [], color="0.7")[0],
     ]
-    labels = [
-        "SEG-1 segment (one colour each)",
-        "cut point",
-        "zero-velocity crossing",
-        "not in a segment",
-    ]
+    labels = ["zero-velocity crossing", "not in a segment"]
+    if seg.size:
+        handles[:0] = [
+            axes[0].plot([], [], color="tab:blue", lw=1.8)[0],
+            axes[0].plot([], [], "|", ms=12, mew=2.0, color="k")[0],
+        ]
+        labels[:0] = ["SEG-1 segment (one colour each)", "cut point"]
+    else:
+        labels[-1] = "no SEG-1 segment in this trial"
     if tb is not None:
         handles.append(axes[0].plot([], [], "^", color="k", alpha=0.7)[0])
         labels.append("true stroke boundary (generator)")

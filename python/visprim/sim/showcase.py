@@ -55,14 +55,35 @@ def play_primitives(
     return {k: play(*primitive_trajectory(model, k), model=adonis, **play_args) for k in chosen}
 
 
+def motion_deg(angles: NDArray[np.float64]) -> float:
+    """How much a movement moves, degrees: the path length of the upper-arm and forearm
+    directions of ``angles`` (n, 4 n_arms) radians, summed over the bones (the angle each
+    bone turns through from sample to sample, added up). Blind to humeral rotation with the
+    elbow straight and to γ/α swings at the Z-Y-Z singularity, which change nothing visible."""
+    from visprim.features import from_angles
+
+    a = np.asarray(angles, dtype=np.float64)
+    if a.shape[0] < 2:
+        return 0.0
+    u = from_angles(a, "directions").reshape(a.shape[0], -1, 3)
+    cos = np.clip(np.sum(u[1:] * u[:-1], axis=2), -1.0, 1.0)
+    return float(np.degrees(np.sum(np.arccos(cos))))
+
+
 def _default_indices(model: PrimitiveSource, n: int) -> list[int]:
-    """The ``n`` primitives with the most member segments (``labels_``), else the first."""
+    """The ``n`` primitives that move most (:func:`motion_deg` of their angle curves), among
+    those with at least two member segments (``labels_``) when there are ``n`` of them, so
+    that a one-segment outlier is not shown for the model's movements."""
     k = int(model.n_primitives)
+    motion = np.array([motion_deg(np.asarray(model.primitive_angles(i))) for i in range(k)])
     labels = getattr(model, "labels_", None)
-    if labels is None:
-        return list(range(min(n, k)))
-    counts = np.bincount(np.asarray(labels, dtype=np.int64), minlength=k)[:k]
-    return sorted(int(i) for i in np.argsort(-counts, kind="stable")[:n])
+    pool = np.arange(k)
+    if labels is not None:
+        counts = np.bincount(np.asarray(labels, dtype=np.int64), minlength=k)[:k]
+        if int(np.sum(counts >= 2)) >= n:
+            pool = np.flatnonzero(counts >= 2)
+    order = pool[np.argsort(-motion[pool], kind="stable")]
+    return sorted(int(i) for i in order[:n])
 
 
 def write_metrics_csv(path: Path, playbacks: dict[int, Playback]) -> Path:
@@ -97,8 +118,9 @@ def demo_primitives(
     GIFs of a few of them.
 
     Writes ``out_dir/adonis_metrics.csv`` (all primitives) and
-    ``out_dir/adonis_primitive_KK.gif`` for ``indices`` (default: the ``n`` primitives with
-    the most member segments). Returns the GIF paths.
+    ``out_dir/adonis_primitive_KK.gif`` for ``indices`` (default: the ``n`` primitives that
+    move most, :func:`motion_deg`, so that the GIFs show movement rather than the near-rest
+    primitives that hold most segments). Returns the GIF paths.
     """
     out = Path(out_dir)
     k = int(model.n_primitives)
@@ -119,7 +141,12 @@ def demo_primitives(
     paths = []
     for i in chosen:
         pb = playbacks[i]
-        path = render_gif(pb, out / f"adonis_primitive_{i:02d}.gif", title=f"primitive {i}")
+        moves = motion_deg(np.asarray(model.primitive_angles(i)))
+        path = render_gif(
+            pb,
+            out / f"adonis_primitive_{i:02d}.gif",
+            title=f"primitive {i}: bones turn {moves:.0f}°",
+        )
         log.info(f"  primitive {i:2d}: {pb.summary()} -> {path}")
         paths.append(path)
     return paths
