@@ -232,6 +232,19 @@ def write_report(
             "dropped eigenvalues; total = projection + clustering (the residuals are "
             "orthogonal)."
         )
+        + (
+            ""
+            if model.features == "zyz"
+            else '<p class="note">'
+            + html_escape(
+                "This model's vectors hold unit-vector components of the upper arm and "
+                "forearm, not angles. A component that changes by δ turns its bone by about "
+                "δ radians, so the tables give the squared component errors as deg² of bone "
+                f"direction: (component × 180/π)², {math.degrees(1.0) ** 2:.0f} times the "
+                "squared components of Fig. 7."
+            )
+            + "</p>"
+        )
         + "".join(table_html),
     )
     for heading, text in extra_sections:
