@@ -173,3 +173,32 @@ def test_simulate_source_needs_a_movement(tmp_path, monkeypatch, capsys) -> None
     assert main([*argv, "--out", str(tmp_path / "x.gif")]) == 2
     assert "recording" in capsys.readouterr().err
     assert not (tmp_path / "x.gif").exists()
+
+
+def test_posture_relative_primitives_are_played_where_their_segments_were() -> None:
+    """A primitive of posture-relative vectors placed at its segments' mean posture has
+    their mean elevation and is closer to them (bone directions) than the bare shape
+    around the zero posture (members come from several postures: the primitive is one)."""
+    from visprim import PrimitiveModel
+    from visprim.datasets import imitation_experiment
+    from visprim.features import direction_rms_deg
+
+    trials = imitation_experiment(2, 4, seed=0)
+    model = PrimitiveModel.paper(offsets="mean", n_components=8, n_clusters=4, n_init=2)
+    model.fit(trials)
+    postures = sim_cli.primitive_postures(model, trials)
+    assert postures.shape == (4, 4)
+    sv = model.vectorize(model.prepare(trials))
+    curves = sv.to_trial_angles(sv.vectors)  # each segment on the trial's own angles
+    k = int(np.argmax(np.bincount(model.labels_)))
+    members = curves[model.labels_ == k]
+    _, posed = sim_cli.primitive_trajectory(model, k, postures[k])
+    _, bare = sim_cli.primitive_trajectory(model, k)
+    # The arm's mean elevation β is the members' (not the hanging arm's) ...
+    beta = np.degrees(members[:, :, 1].mean())
+    assert abs(np.degrees(posed[:, 1].mean()) - beta) < 2.0
+    assert abs(np.degrees(bare[:, 1].mean()) - beta) > 10.0
+    # ... and the bones are nearer the members' throughout.
+    err_posed = np.mean([direction_rms_deg(posed, m) for m in members])
+    err_bare = np.mean([direction_rms_deg(bare, m) for m in members])
+    assert err_posed < err_bare, (err_posed, err_bare)

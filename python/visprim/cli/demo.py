@@ -97,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
         say(f"Segment primitives vs true stroke labels: {cls}")
 
         st.step("primitives on the humanoid")
-        tmp_gifs = _demo_sim(models["seg2"], tmp, args)
+        tmp_gifs = _demo_sim(models["seg2"], tmp, args, trials)
         st.step("report")
         write_report(
             models["seg2"],
@@ -123,15 +123,18 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _demo_sim(model: Any, out_dir: Path, args: argparse.Namespace) -> list[Path]:
+def _demo_sim(model: Any, out_dir: Path, args: argparse.Namespace, trials: Any) -> list[Path]:
     if args.no_sim:
         return []
     try:
-        from visprim.sim.showcase import demo_primitives
+        from visprim.sim.showcase import demo_primitives, primitive_postures
     except ImportError as exc:
         log.warning("the humanoid simulation is not available (%s); no primitive GIFs", exc)
         return []
-    return list(demo_primitives(model, out_dir / "primitives", n=args.sim_primitives))
+    # Posture-relative primitives are played where their segments were made.
+    postures = primitive_postures(model, trials) if model.offsets == "mean" else None
+    gifs = demo_primitives(model, out_dir / "primitives", n=args.sim_primitives, postures=postures)
+    return list(gifs)
 
 
 def register(sub: Any) -> None:

@@ -321,7 +321,8 @@ def write_report(
             paragraph(
                 "Primitives played back on Adonis (DART simulation): by default the ones "
                 "whose upper arm and forearm travel furthest (the bones' path length, in "
-                "the titles), not the most populated, which are near rest."
+                "the titles), not the most populated, which are near rest; `visprim demo` "
+                "plays primitives of posture-relative vectors at their segments' mean posture."
             )
             + f'<div class="gifs">{imgs}</div>',
         )
