@@ -7,7 +7,8 @@ are plotted in **degrees**, times in seconds; the data given to the functions ar
 What a model's segment vectors are made of (:mod:`visprim.features`) decides how its
 eigenvectors, primitives, eigenvalues and SEG-2 speed are drawn and labelled
 (:class:`Channels`): Z-Y-Z angles in degrees, or the components of the unit upper-arm and
-forearm vectors in the shoulder frame (x forward, y right, z down), dimensionless.
+forearm vectors in the shoulder frame (x forward, y outward: right for the right arm, left
+for the mirrored left arm, z down), dimensionless.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ assert len(ANGLE_LABELS) == len(ANGLE_NAMES)
 
 
 #: The shoulder frame's axes, as the direction components are labelled.
-_AXES = ("x fwd", "y right", "z down")
+_AXES = ("x fwd", "y out", "z down")
 _AXIS_COLORS = ("tab:blue", "tab:orange", "tab:green")
 _LEFT_COLORS = ("tab:red", "tab:purple", "tab:brown", "tab:olive")
 
@@ -116,7 +117,7 @@ class Channels:
             return "the four Z-Y-Z arm angles (degrees)"
         return (
             "the components of the unit upper-arm (solid) and forearm (dashed) vectors in the "
-            "shoulder frame (x forward, y right, z down; dimensionless)"
+            "shoulder frame (x forward, y outward, z down; dimensionless)"
         )
 
     @property
