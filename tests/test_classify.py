@@ -42,13 +42,14 @@ def test_classify_trials_sequences_and_histograms():
     trials = list(default_trials()[:5])
     results = classify_trials(m, trials)
     assert [r.name for r in results] == [t.name for t in trials]
-    all_labels = np.concatenate([r.labels for r in results])
+    all_labels = np.concatenate([r.primitives for r in results])
     np.testing.assert_array_equal(all_labels, m.predict(trials))
     for r in results:
         assert r.histogram.shape == (m.n_primitives,)
         assert r.histogram.sum() == len(r.sequence) == r.segments.shape[0]
         assert np.all(np.diff(r.segments[:, 0]) > 0)
         assert np.all(r.distances >= 0)
+        assert r.labels is r.primitives  # the former name still works
 
 
 @pytest.mark.parametrize(
@@ -67,7 +68,7 @@ def test_primitives_recover_the_true_strokes(segmentation, min_ari, min_purity):
     assert s.purity >= min_purity, str(s)
     # Cross-check the ARI with an independent computation on the same matching.
     results = classify_trials(m, trials)
-    pred = np.concatenate([r.labels for r in results])
+    pred = np.concatenate([r.primitives for r in results])
     true = np.concatenate(
         [
             match_strokes(r.segments, t.truth.boundaries, t.truth.labels)

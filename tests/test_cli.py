@@ -4,6 +4,7 @@ failures in test_cli_errors.py, outputs in test_cli_outputs.py)."""
 from __future__ import annotations
 
 import re
+from html import escape as html_escape
 
 import numpy as np
 import pytest
@@ -112,6 +113,16 @@ def test_classify_prints_sequences_and_scores(learned, tmp_path, capsys):
     assert labels.size > 0 and labels.max() < 8
 
 
+def test_demo_quiet_prints_only_where_the_results_are(tmp_path, capsys):
+    out = tmp_path / "demo"
+    argv = ["-q", "demo", "--out", str(out), "--no-sim", "--subjects", "2", "--stimuli", "6"]
+    assert main([*argv, "--clusters", "4"]) == 0
+    printed = capsys.readouterr().out
+    assert "Table 1" not in printed and "| SEG-1 |" not in printed
+    assert f"Report:  {out / 'index.html'}" in printed
+    assert (out / "table1.md").exists()
+
+
 def test_demo_small(tmp_path, capsys):
     out = tmp_path / "demo"
     assert (
@@ -135,7 +146,10 @@ def test_demo_small(tmp_path, capsys):
     assert "Segmentation against the true stroke boundaries" in printed
     assert "| SEG-1 |" in printed and "| SEG-2 |" in printed
     assert printed.count("**Table 1") == 2  # SEG-1 and SEG-2 models
-    assert "Classification at k = " in printed
+    # One heading, the same scores on the console and on the page.
+    scores = re.search(r"Segment primitives vs true stroke labels: (.*)", printed)
+    assert scores is not None and "at k = " in scores[1] and "SEG-2 model (k = 8)" in scores[1]
+    assert html_escape(scores[1]) in (out / "index.html").read_text(encoding="utf-8")
     assert f"Report:  {out / 'index.html'}" in printed
     assert f"saved {out / 'model_seg2.npz'}" in printed  # final paths, not the temporary ones
     for name in ("index.html", "model_seg1.npz", "model_seg2.npz", "primitives.png", "table1.md"):

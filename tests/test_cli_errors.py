@@ -263,3 +263,25 @@ def test_learn_real_recordings_as_given(shared_data, tmp_path, capsys):
     assert "1 trial(s) shorter than the filter padding (padded less)" in captured.out
     assert f"model written to {out}" in captured.out
     assert np.isfinite(np.load(out)["cluster_centers"]).all()
+
+
+def test_summary_names_the_trials_without_a_segment() -> None:
+    from types import SimpleNamespace
+
+    from visprim.cli import common
+
+    model = SimpleNamespace(
+        seg2_threshold_=None,
+        n_trials_without_segments_=2,
+        n_short_trials_=0,
+        segment_trial_=[0, 0, 2, 2],
+        trial_names_=["walk", "still", "wave", "idle"],
+        features="directions",
+        inertia_=1.0,
+        segmentation="seg2",
+        n_training_segments_=4,
+        n_components=3,
+        dim=600,
+        n_primitives=2,
+    )
+    assert "2 trial(s) without a segment (still, idle)" in common.summary(model, 4)

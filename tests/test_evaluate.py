@@ -189,3 +189,41 @@ def test_read_movements_reads_the_arm_asked_for(shared_data: Path) -> None:
     assert right[0] is not None and both[0] is not None
     assert right[0].markers.shape[1] == 4 and both[0].markers.shape[1] == 8
     assert abs(right[0].markers - both[0].markers[:, :4]).max() < 1e-12
+
+
+def test_page_is_styled_with_figures_and_label_sources(tmp_path: Path) -> None:
+    """evaluate.html: the report page's style sheet, wide tables in a scrolling box, a
+    confusion-matrix and a per-group figure per benchmark, and where the labels came from."""
+    from PIL import Image
+    from visprim.evaluate import BANDAI_RULE
+    from visprim.report.html import CSS
+
+    _touch(tmp_path / "c", "a1.bvh", "dataset-2_wave-right-hand_elderly_004.bvh")
+    (tmp_path / "c" / "labels.tsv").write_text("file\tlabel\na1.bvh\twave\n")
+    recs, _ = find_recordings([tmp_path / "c"])
+    sources = {r.path.name: r.label_source for r in recs}
+    assert sources == {
+        "a1.bvh": str(tmp_path / "c" / "labels.tsv"),
+        "dataset-2_wave-right-hand_elderly_004.bvh": BANDAI_RULE,
+    }
+
+    data, labels = movements(3, seed=0)
+    recs = [
+        Recording(Path(f"m{i}.bvh"), lab, "", f"g{i // 3}", "", "synthetic", "my.tsv")
+        for i, lab in enumerate(labels)
+    ]
+    res = evaluate_benchmark(
+        make_benchmarks(recs, data)[0][0], classifier=MotionClassifier(model_params=SMALL_MODEL)
+    )
+    assert res.label_sources == {"my.tsv": 9}
+    assert "Labels from my.tsv (9 recordings)." in to_markdown([res])
+    paths = write_report([res], [], tmp_path / "out")
+    page = paths["html"].read_text()
+    assert CSS in page
+    assert page.count('<div class="scroll"><table>') == page.count("<table>") == 3
+    for kind in ("confusion", "groups"):
+        png = paths[f"{kind} synthetic"]
+        assert f'<img src="{png.name}"' in page
+        with Image.open(png) as im:
+            assert im.format == "PNG" and im.size[0] >= 400
+    assert "Labels from my.tsv" in page

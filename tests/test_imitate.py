@@ -185,3 +185,39 @@ def test_bone_direction_errors_are_reported(result) -> None:
     assert m["rebuild_vs_human_direction_rms_deg"] == pytest.approx(want, rel=1e-9)
     assert 0.0 < m["adonis"]["vs_human_direction_rms_deg"] < 90.0
     assert "bone-direction RMS" in result.summary()
+
+
+def test_headline_is_the_bone_direction_rms_beside_holding_still(result) -> None:
+    """One headline figure (Adonis vs human, bone directions) and the still-posture
+    baseline, recomputed here from forward kinematics."""
+    from visprim.arm import forward_kinematics
+
+    head = result.metrics["headline"]
+    assert head["compares"] == "Adonis vs human"
+    assert head["rms_deg"] == result.metrics["adonis"]["vs_human_direction_rms_deg"]
+    human = result.human[result.covered]
+    pts = forward_kinematics(human)
+    bones = np.stack([pts[:, 1] - pts[:, 0], pts[:, 2] - pts[:, 1]], axis=1)
+    bones /= np.linalg.norm(bones, axis=2, keepdims=True)
+    mean = bones.mean(axis=0)
+    mean /= np.linalg.norm(mean, axis=1, keepdims=True)
+    cos = np.clip(np.sum(bones * mean, axis=2), -1, 1)
+    want = np.degrees(np.sqrt(np.mean(np.arccos(cos) ** 2)))
+    assert head["still_posture_rms_deg"] == pytest.approx(want, rel=1e-9)
+    assert head["ratio_to_still"] == pytest.approx(head["rms_deg"] / want)
+    text = result.summary()
+    first = text.splitlines()[2]
+    assert first.startswith("  headline: Adonis vs human bone-direction RMS")
+    assert f"{head['still_posture_rms_deg']:.2f}" in first
+    assert "details" in text
+
+
+def test_headline_notes_one_primitive_and_near_still() -> None:
+    from visprim.imitate import headline
+
+    metrics = {"rebuild_vs_human_direction_rms_deg": 4.7}
+    head = headline(metrics, [0, 0, 0], still_deg=5.0)
+    assert head["compares"] == "rebuild vs human"
+    assert len(head["notes"]) == 2
+    assert "primitive 0" in head["notes"][0] and "holding" in head["notes"][1]
+    assert headline(metrics, [0, 1, 0], still_deg=20.0)["notes"] == []

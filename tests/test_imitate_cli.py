@@ -63,6 +63,25 @@ def test_imitate_refuses_bad_input_in_one_line(files, tmp_path, capsys) -> None:
     assert not out.exists()
 
 
+def test_imitate_checks_folders_and_size_up_front(files, tmp_path, capsys) -> None:
+    model, rec, _ = files
+    out = tmp_path / "x"
+    assert main(["imitate", str(model), str(rec.parent), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "is a folder" in err and rec.name in err and "one recording file" in err
+    assert err.count("\n") == 1
+    assert main(["imitate", str(model.parent), str(rec), "--out", str(out)]) == 2
+    assert "model file" in capsys.readouterr().err
+    # A video size PIL cannot draw is refused before the simulation runs.
+    assert main(["imitate", str(model), str(rec), "--out", str(out), "--size", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "--size 0" in err and err.count("\n") == 1
+    assert not out.exists()
+    assert (
+        main(["imitate", str(model), str(rec), "--out", str(out), "--size", "0", "--no-video"]) == 0
+    )
+
+
 def test_export_robot_writes_urdf_and_primitive_trajectories(files, tmp_path, capsys) -> None:
     model, _, k = files
     urdf = tmp_path / "adonis.urdf"

@@ -50,7 +50,7 @@ def test_primitive_trajectory_spans_the_duration() -> None:
 def test_demo_primitives_writes_gifs_and_metrics(tmp_path, caplog) -> None:
     with caplog.at_level("INFO", logger="visprim"):
         paths = sim_cli.demo_primitives(FakeModel(), tmp_path / "demo", n=2)
-    # The two most used primitives (labels_): 2 and 1.
+    # Only primitives 1 and 2 hold two segments or more (labels_).
     assert [p.name for p in paths] == ["adonis_primitive_01.gif", "adonis_primitive_02.gif"]
     for p in paths:
         with Image.open(p) as im:
@@ -63,6 +63,35 @@ def test_demo_primitives_writes_gifs_and_metrics(tmp_path, caplog) -> None:
         assert float(r["time_ratio"]) <= 1.5
         assert r["via_reached"] == r["via_points"]
     assert "all 3 primitives" in caplog.text and "adonis_primitive_02.gif" in caplog.text
+
+
+def test_demo_plays_the_primitives_that_move_most() -> None:
+    """Not the most used: a still primitive holding most segments is passed over. The
+    motion is the bones' path length, recomputed from forward kinematics."""
+    from visprim.arm import forward_kinematics
+
+    model = FakeModel()
+    model._angles.append(np.tile(model._angles[0][:1], (100, 1)))  # primitive 3: still
+    a0 = model._angles[0]
+    model._angles.append(a0[:1] + 0.5 * (a0 - a0[:1]))  # primitive 4: half of 0
+    model.primitive_durations_ = np.array([0.5, 0.4, 0.6, 0.5, 0.4])
+    model.labels_ = np.array([3, 3, 3, 3, 3, 0, 0, 1, 1, 2, 2, 4, 4])
+    type(model).n_primitives = property(lambda self: 5)  # type: ignore[assignment]
+
+    def path(angles: np.ndarray) -> float:
+        pts = forward_kinematics(angles)
+        bones = np.stack([pts[:, 1] - pts[:, 0], pts[:, 2] - pts[:, 1]], axis=1)
+        bones /= np.linalg.norm(bones, axis=2, keepdims=True)
+        cos = np.clip(np.sum(bones[1:] * bones[:-1], axis=2), -1, 1)
+        return float(np.degrees(np.arccos(cos).sum()))
+
+    moves = [path(model.primitive_angles(k)) for k in range(5)]
+    assert moves[3] < 0.01  # arccos of 1 - rounding
+    for k in range(5):
+        assert sim_cli.motion_deg(model.primitive_angles(k)) == pytest.approx(moves[k], abs=0.01)
+    want = sorted(int(i) for i in np.argsort(moves)[::-1][:3])
+    assert 3 not in want
+    assert sim_cli._default_indices(model, 3) == want
 
 
 def test_simulate_command_with_stand_in_model(tmp_path, monkeypatch, capsys) -> None:
@@ -144,3 +173,32 @@ def test_simulate_source_needs_a_movement(tmp_path, monkeypatch, capsys) -> None
     assert main([*argv, "--out", str(tmp_path / "x.gif")]) == 2
     assert "recording" in capsys.readouterr().err
     assert not (tmp_path / "x.gif").exists()
+
+
+def test_posture_relative_primitives_are_played_where_their_segments_were() -> None:
+    """A primitive of posture-relative vectors placed at its segments' mean posture has
+    their mean elevation and is closer to them (bone directions) than the bare shape
+    around the zero posture (members come from several postures: the primitive is one)."""
+    from visprim import PrimitiveModel
+    from visprim.datasets import imitation_experiment
+    from visprim.features import direction_rms_deg
+
+    trials = imitation_experiment(2, 4, seed=0)
+    model = PrimitiveModel.paper(offsets="mean", n_components=8, n_clusters=4, n_init=2)
+    model.fit(trials)
+    postures = sim_cli.primitive_postures(model, trials)
+    assert postures.shape == (4, 4)
+    sv = model.vectorize(model.prepare(trials))
+    curves = sv.to_trial_angles(sv.vectors)  # each segment on the trial's own angles
+    k = int(np.argmax(np.bincount(model.labels_)))
+    members = curves[model.labels_ == k]
+    _, posed = sim_cli.primitive_trajectory(model, k, postures[k])
+    _, bare = sim_cli.primitive_trajectory(model, k)
+    # The arm's mean elevation β is the members' (not the hanging arm's) ...
+    beta = np.degrees(members[:, :, 1].mean())
+    assert abs(np.degrees(posed[:, 1].mean()) - beta) < 2.0
+    assert abs(np.degrees(bare[:, 1].mean()) - beta) > 10.0
+    # ... and the bones are nearer the members' throughout.
+    err_posed = np.mean([direction_rms_deg(posed, m) for m in members])
+    err_bare = np.mean([direction_rms_deg(bare, m) for m in members])
+    assert err_posed < err_bare, (err_posed, err_bare)

@@ -57,7 +57,9 @@ class TrialClassification:
     ----------
     name : str — the trial's name.
     segments : (n, 2) float array, seconds — the trial's segments (model's segmentation).
-    labels : (n,) int array — primitive of each segment, in time order (the *sequence*).
+    primitives : (n,) int array — primitive index of each segment (a cluster of the model,
+        not a class label), in time order (the *sequence*); ``labels`` is an alias kept for
+        older code.
     distances : (n,) float array, radians — Euclidean distance of each segment's projection
         to its primitive's centre.
     n_primitives : int — number of primitives k of the model.
@@ -65,19 +67,24 @@ class TrialClassification:
 
     name: str
     segments: NDArray[np.float64]
-    labels: NDArray[np.int64]
+    primitives: NDArray[np.int64]
     distances: NDArray[np.float64]
     n_primitives: int
 
     @property
+    def labels(self) -> NDArray[np.int64]:
+        """The same as :attr:`primitives` (its former name)."""
+        return self.primitives
+
+    @property
     def sequence(self) -> tuple[int, ...]:
         """The primitives in time order."""
-        return tuple(int(v) for v in self.labels)
+        return tuple(int(v) for v in self.primitives)
 
     @property
     def histogram(self) -> NDArray[np.int64]:
         """(k,) number of segments assigned to each primitive."""
-        return np.bincount(self.labels, minlength=self.n_primitives).astype(np.int64)
+        return np.bincount(self.primitives, minlength=self.n_primitives).astype(np.int64)
 
 
 def classify_trials(
@@ -109,7 +116,7 @@ def classify_trials(
             TrialClassification(
                 name=name,
                 segments=np.stack([starts[m], ends[m]], axis=1),
-                labels=labels[m],
+                primitives=labels[m],
                 distances=dist[m],
                 n_primitives=k,
             )
@@ -209,7 +216,7 @@ def score_against_truth(
     pred, true = [], []
     for trial, c in zip(trials, classifications, strict=True):
         assert trial.truth is not None
-        pred.append(c.labels)
+        pred.append(c.primitives)
         true.append(match_strokes(c.segments, trial.truth.boundaries, trial.truth.labels))
     p = np.concatenate(pred)
     t = np.concatenate(true)

@@ -45,6 +45,7 @@ import csv
 import io
 import os
 import time
+from collections import Counter
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -89,6 +90,8 @@ DEFAULT_PERIOD: float = STUDY_FRAME_PERIOD_S
 
 #: Extensions of the recordings searched for in folders: every reader's.
 _EXTENSIONS = tuple(FORMATS)
+#: How :func:`find_recordings` names the Bandai-Namco file-name rule as a label source.
+BANDAI_RULE = "Bandai-Namco file names (dataset-N_<label>_<style>_<take>)"
 
 
 @dataclass(frozen=True)
@@ -101,6 +104,8 @@ class Recording:
     subject: str = ""
     take: str = ""
     benchmark: str = ""
+    #: Where the label came from: the labels table's path, or the file-name rule.
+    label_source: str = field(default="", compare=False)
 
     def group(self, column: str) -> str:
         return str(getattr(self, column))
@@ -158,8 +163,10 @@ def find_recordings(
             continue
         seen.add(f.resolve())
         row: Mapping[str, str] | None = None
+        source = ""
         if given is not None:
             row = given.get(f.name) or given.get(str(f))
+            source = str(labels)
         else:
             folder = f.parent
             if folder not in tables:
@@ -170,10 +177,12 @@ def find_recordings(
             rows = tables[folder]
             if rows is not None:
                 row = rows.get(f.name)
+                source = str(folder / "labels.tsv")
         if row is None:
             m = BANDAI_NAME.match(f.stem)
             if m is not None and given is None:
                 row = {"label": m["content"], "style": m["style"], "take": m["take"], "subject": ""}
+                source = BANDAI_RULE
         if row is None or not (row.get("label") or "").strip():
             unlabelled.append(f)
             continue
@@ -185,6 +194,7 @@ def find_recordings(
                 subject=(row.get("subject") or "").strip(),
                 take=(row.get("take") or "").strip(),
                 benchmark=_benchmark_name(f.parent),
+                label_source=source,
             )
         )
     return found, unlabelled
@@ -295,6 +305,8 @@ class BenchmarkResult:
     #: How held-out segments were rebuilt: ``"one arm"`` (one-arm movements), ``"each arm"``
     #: or ``"joint"`` (two-arm movements, see :func:`evaluate_benchmark`).
     reconstruction: str = "one arm"
+    #: Where the labels came from (:attr:`Recording.label_source`) → number of recordings.
+    label_sources: dict[str, int] = field(default_factory=dict)
 
 
 def _choose_group(recordings: Sequence[Recording], group_by: str | None) -> str:
@@ -482,6 +494,7 @@ def evaluate_benchmark(
         reconstruction=(
             "one arm" if bench.movements[0].n_arms == 1 else reconstruction.replace("-", " ")
         ),
+        label_sources=dict(Counter(r.label_source or "not recorded" for r in bench.recordings)),
     )
 
 
@@ -688,6 +701,13 @@ def to_markdown(results: Sequence[BenchmarkResult], notes: Sequence[str] = ()) -
     )
     for r in results:
         out += ["", f"## {r.name}", ""]
+        if r.label_sources:
+            out.append(
+                "Labels from "
+                + "; ".join(f"{src} ({n} recordings)" for src, n in r.label_sources.items())
+                + "."
+            )
+            out.append("")
         out.append(f"| {r.group_by} | trials | MotionClassifier | DTW baseline |")
         out.append("|---|---|---|---|")
         for grp, (a, b, n) in r.per_group.items():
@@ -710,20 +730,34 @@ def to_markdown(results: Sequence[BenchmarkResult], notes: Sequence[str] = ()) -
     return "\n".join(out) + "\n"
 
 
-def to_html(markdown: str) -> str:
-    """A short self-contained HTML page of the markdown report (tables, headings, lists;
-    :func:`visprim.report.html.markdown_to_html`)."""
-    from visprim.report.html import markdown_to_html
+def to_html(markdown: str, figures: Mapping[str, Sequence[tuple[str, str]]] | None = None) -> str:
+    """A self-contained HTML page of the markdown report (:func:`visprim.report.html.
+    markdown_to_html`), styled like the ``visprim report`` page; wide tables scroll
+    sideways. ``figures`` maps a benchmark's name to ``(image src, caption)`` pairs shown at
+    the end of its section."""
+    from visprim.report.html import CSS, figure, markdown_to_html
 
-    body = [markdown_to_html(markdown)]
-    style = (
-        "body{font-family:sans-serif;max-width:70em;margin:2em auto}"
-        "table{border-collapse:collapse;margin:1em 0}"
-        "td,th{border:1px solid #ccc;padding:.2em .5em;text-align:right}"
-    )
+    figures = figures or {}
+    body: list[str] = []
+    section: str | None = None
+    lines: list[str] = []
+
+    def close_section() -> None:
+        body.append(markdown_to_html("\n".join(lines)))
+        lines.clear()
+        for src, caption in figures.get(section or "", ()):
+            body.append(figure(src, caption))
+
+    for line in markdown.splitlines():
+        if line.startswith("## "):
+            close_section()
+            section = line[3:].strip()
+        lines.append(line)
+    close_section()
     return (
-        "<!doctype html><html><head><meta charset='utf-8'><title>visprim evaluate</title>"
-        f"<style>{style}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n"
+        '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+        "<title>visprim evaluate</title>"
+        f"<style>{CSS}</style></head><body>\n" + "\n".join(body) + "\n</body></html>\n"
     )
 
 
@@ -757,5 +791,56 @@ def write_report(
     write_text(paths["markdown"], md, newline="")
     write_text(paths["summary"], buf.getvalue(), newline="")
     write_text(paths["predictions"], pbuf.getvalue(), newline="")
-    write_text(paths["html"], to_html(md), newline="")
+    shown: dict[str, list[tuple[str, str]]] = {}
+    for bench, kind, path, caption in _write_figures(results, out):
+        paths[f"{kind} {bench}"] = path
+        shown.setdefault(bench, []).append((path.name, caption))
+    write_text(paths["html"], to_html(md, shown), newline="")
     return paths
+
+
+def _write_figures(
+    results: Sequence[BenchmarkResult], out: Path
+) -> list[tuple[str, str, Path, str]]:
+    """Per benchmark, the confusion matrix and the per-group accuracy as PNGs (each written
+    atomically): ``(benchmark, kind, path, caption)``."""
+    from visprim.report import figures
+    from visprim.report.html import slug
+
+    drawn: list[tuple[str, str, Path, str]] = []
+    for r in results:
+        name = slug(r.name)
+        cm = figures.confusion_figure(
+            r.classes,
+            r.confusion,
+            f"{r.name}: MotionClassifier, held-out {r.group_by} "
+            f"(accuracy {r.accuracy:.3f}, {r.n_trials} trials)",
+        )
+        groups = figures.group_accuracy_figure(
+            r.per_group, r.group_by, f"{r.name}: accuracy on each held-out {r.group_by}"
+        )
+        for kind, fig, caption in (
+            (
+                "confusion",
+                cm,
+                "Confusion matrix of the MotionClassifier on the held-out groups (rows: true "
+                "class, columns: predicted; counts, shaded by the fraction of the true class).",
+            ),
+            (
+                "groups",
+                groups,
+                f"Accuracy on each held-out {r.group_by}, MotionClassifier beside the DTW "
+                "1-NN baseline (trials per group under the names).",
+            ),
+        ):
+            path = out / f"{kind}_{name}.png"
+            fd, tmp = tempfile.mkstemp(dir=out, prefix=f".{path.name}.", suffix=".png")
+            os.close(fd)
+            try:
+                figures.save_figure(fig, Path(tmp))
+                os.replace(tmp, path)
+            except BaseException:
+                Path(tmp).unlink(missing_ok=True)
+                raise
+            drawn.append((r.name, kind, path, caption))
+    return drawn

@@ -37,6 +37,14 @@ segment covers:
   (upper arm and forearm, :func:`visprim.features.direction_rms_deg`): what is seen of the
   arm, blind to humeral rotation with the elbow straight, where it changes nothing visible.
 
+**The headline** (:attr:`Imitation.metrics` ``["headline"]``, :func:`headline`) is one of
+them: the bone-direction RMS of Adonis vs the human (of the rebuild vs the human when the
+rebuild is not played), the error a viewer sees, beside the **still-posture baseline**: the
+same RMS for an arm that holds the recording's mean posture (the mean upper-arm and forearm
+directions over the covered frames) throughout. An imitation that does not beat holding
+still by much, or that puts every segment on one primitive, is flagged in its notes. The
+other figures are details.
+
 Coverage: the parts of the recording before the first segment, after the last and between
 segments are listed (seconds and percent of the recording); nothing is dropped silently.
 Gaps between segments are bridged smoothly in the rebuild and played.
@@ -54,7 +62,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from visprim.arm import ANGLE_NAMES, shoulder_rotation_body
-from visprim.features import direction_rms_deg
+from visprim.features import direction_rms_deg, from_angles
 from visprim.ik import human_arm_points
 from visprim.params import STUDY_FRAME_PERIOD_S
 from visprim.sim.joining import JoinedTrajectory
@@ -82,8 +90,10 @@ __all__ = [
     "ArmsRebuild",
     "Imitation",
     "Rebuild",
+    "headline",
     "human_arm_points",
     "imitate",
+    "still_direction_rms_deg",
     "model_frame_period",
 ]
 
@@ -147,7 +157,8 @@ class Imitation:
         return self.segment_of_frame >= 0
 
     def summary(self) -> str:
-        """A few lines for the terminal."""
+        """A few lines for the terminal: the headline and its baseline first, then the
+        details."""
         m = self.metrics
         rb = m["rebuild_vs_human_rms_deg"]
         if self.segment_arm is None:
@@ -158,15 +169,22 @@ class Imitation:
                 + " ".join(str(int(k)) for k in self.primitives[self.segment_arm == i])
                 for i, side in enumerate(ARM_SIDES)
             )
+        head = m["headline"]
         lines = [
             f"{self.name} ({len(self.times)} frames every {1e3 * m['frame_period_s']:.1f} ms, "
             f"{m['segmentation'].upper()}): {len(self.primitives)} segments -> primitives "
             f"{sequence}",
             f"  rebuild: {SOURCE_LABELS[self.source]}",
-            "  rebuild vs human RMS (deg): "
-            + ", ".join(f"{a} {rb[a]:.2f}" for a in channel_names(self.human.shape[1]))
-            + f"; overall {rb['overall']:.2f}",
+            f"  headline: {head['compares']} bone-direction RMS {head['rms_deg']:.2f} deg; "
+            f"holding the mean posture still: {head['still_posture_rms_deg']:.2f} deg "
+            f"({100 * head['ratio_to_still']:.0f} % of it)",
         ]
+        lines += [f"  note: {n}" for n in head["notes"]]
+        lines.append(
+            "  details, rebuild vs human RMS per Z-Y-Z angle (deg; gamma, alpha modulo turns): "
+            + ", ".join(f"{a} {rb[a]:.2f}" for a in channel_names(self.human.shape[1]))
+            + f"; overall {rb['overall']:.2f}"
+        )
         cov = m["coverage"]
         lines.append(
             f"  coverage: {cov['covered_s']:.2f} s of {m['human_duration_s']:.2f} s; "
@@ -182,12 +200,12 @@ class Imitation:
             vs_human = a["vs_human_joint_rms_deg"]["overall"]
             vs_rebuild = a["vs_rebuild_joint_rms_deg"]["overall"]
             lines.append(
-                f"  joint-space RMS (deg, shoulder geodesic + elbow): rebuild vs human "
+                f"  details, joint-space RMS (deg, shoulder geodesic + elbow): rebuild vs human "
                 f"{j['overall']:.2f}; Adonis vs human {vs_human:.2f}; "
-                f"Adonis vs rebuild {vs_rebuild:.2f}"
+                f"Adonis vs rebuild {vs_rebuild:.2f} (how well Adonis tracks)"
             )
             lines.append(
-                f"  bone-direction RMS (deg, upper arm and forearm): rebuild vs human "
+                f"  details, bone-direction RMS (deg, upper arm and forearm): rebuild vs human "
                 f"{m['rebuild_vs_human_direction_rms_deg']:.2f}; Adonis vs human "
                 f"{a['vs_human_direction_rms_deg']:.2f}"
             )
@@ -197,7 +215,68 @@ class Imitation:
                 f"{a['time_ratio_full']:.2f}x the whole recording; via points "
                 f"{a['via_reached']}/{a['via_points']}"
             )
+        else:
+            lines.append(
+                f"  details, bone-direction RMS (deg, upper arm and forearm): rebuild vs human "
+                f"{m['rebuild_vs_human_direction_rms_deg']:.2f}"
+            )
         return "\n".join(lines)
+
+
+#: Above this share of the still-posture baseline, an imitation is flagged as barely
+#: better than holding still.
+NEAR_STILL_RATIO = 0.7
+
+
+def still_direction_rms_deg(angles: NDArray[np.float64]) -> float:
+    """The still-posture baseline, degrees: the RMS angle between the bone directions
+    (upper arm, forearm) of ``angles`` (T, 4 n_arms) radians and their mean directions over
+    the T frames, i.e. the bone-direction RMS of an arm holding the mean posture."""
+    a = np.asarray(angles, dtype=np.float64)
+    u = from_angles(a, "directions").reshape(a.shape[0], -1, 3)
+    mean = u.mean(axis=0)
+    norm = np.linalg.norm(mean, axis=1, keepdims=True)
+    mean = np.where(norm > 1e-12, mean / np.maximum(norm, 1e-300), u[0])
+    cos = np.clip(np.einsum("tbi,bi->tb", u, mean), -1.0, 1.0)
+    return float(np.degrees(np.sqrt(np.mean(np.arccos(cos) ** 2))))
+
+
+def headline(
+    metrics: dict[str, Any], primitives: Sequence[int], still_deg: float
+) -> dict[str, Any]:
+    """The headline of an imitation's ``metrics``: the bone-direction RMS that a viewer sees
+    (Adonis vs human if played, else rebuild vs human), the still-posture baseline
+    ``still_deg`` beside it, and notes when every segment went to one primitive or the
+    error is close to the baseline."""
+    if "adonis" in metrics:
+        compares, rms = "Adonis vs human", float(metrics["adonis"]["vs_human_direction_rms_deg"])
+    else:
+        compares, rms = "rebuild vs human", float(metrics["rebuild_vs_human_direction_rms_deg"])
+    ratio = rms / still_deg if still_deg > 0 else float("inf")
+    notes = []
+    used = sorted({int(k) for k in primitives})
+    if len(primitives) > 1 and len(used) == 1:
+        notes.append(
+            f"every segment ({len(primitives)}) went to primitive {used[0]}: the imitation "
+            "repeats one movement"
+        )
+    if ratio >= NEAR_STILL_RATIO:
+        notes.append(
+            f"the error ({rms:.2f} deg) is close to holding the mean posture still "
+            f"({still_deg:.2f} deg): the imitation shows little of the movement"
+        )
+    return {
+        "measure": "bone-direction RMS, degrees: the angle between the upper-arm and forearm "
+        "directions of the two, RMS over the covered frames and both bones",
+        "compares": compares,
+        "rms_deg": rms,
+        "still_posture_rms_deg": float(still_deg),
+        "still_posture": "the human's mean upper-arm and forearm directions over the covered "
+        "frames, held throughout",
+        "ratio_to_still": float(ratio),
+        "n_primitives_used": len(used),
+        "notes": notes,
+    }
 
 
 # ---------------------------------------------------------------------------- helpers
@@ -573,6 +652,7 @@ def imitate(
         playback, adonis = _play(rebuild.start, grid, grid_a, times, human, servo, dt, render_fps)
         metrics["adonis"] = _adonis_metrics(playback, adonis, rb_a, human, cov, servo, dt)
         metrics["adonis"]["time_ratio_full"] = playback.completion_time / duration
+    metrics["headline"] = headline(metrics, labels.tolist(), still_direction_rms_deg(human[cov]))
     return Imitation(
         name=name,
         source=source,
@@ -747,7 +827,7 @@ def write_imitation(
             from visprim.sim.sidebyside import render_imitation
 
             names["video"] = render_imitation(imitation, stage / video, size=size).name
-        doc = dict(imitation.metrics)
+        doc = {"headline": imitation.metrics.get("headline"), **imitation.metrics}
         doc.update(extra or {})
         doc["files"] = dict(names)
         names["json"] = "imitation.json"

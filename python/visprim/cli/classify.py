@@ -33,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
             fh.write("trial,segment,start_s,end_s,primitive,distance_rad\n")
             for r in results:
                 for j, ((s, e), lab, d) in enumerate(
-                    zip(r.segments, r.labels, r.distances, strict=True)
+                    zip(r.segments, r.primitives, r.distances, strict=True)
                 ):
                     fh.write(f"{r.name},{j},{s:.6f},{e:.6f},{int(lab)},{d:.6g}\n")
         print(f"segment primitives written to {out}")
@@ -55,7 +55,12 @@ def register(sub: Any) -> None:
         "data", nargs="*", metavar="DATA", help="recordings (default: the generated experiment)"
     )
     p.add_argument(
-        "--out", default=None, metavar="CSV", help="also write the segment primitives (.csv)"
+        "--out",
+        default=None,
+        metavar="CSV",
+        help="also write one row per segment: trial, segment, start_s, end_s, primitive (the "
+        "index of its nearest primitive, a cluster of the model, not a class label), "
+        "distance_rad (.csv)",
     )
     common.add_force_option(p)
     common.add_reader_options(p)

@@ -529,6 +529,17 @@ def label(method: str) -> str:
     return method.replace("seg", "SEG-")
 
 
+def _trials_without_segments(model: Any, shown: int = 5) -> str:
+    """The names of the training trials in which no segment was found, in parentheses
+    (at most ``shown``, then how many more), or "" when the model does not know them."""
+    used = {int(i) for i in getattr(model, "segment_trial_", ())}
+    names = [n for i, n in enumerate(getattr(model, "trial_names_", ())) if i not in used]
+    if not names:
+        return ""
+    more = f" and {len(names) - shown} more" if len(names) > shown else ""
+    return f" ({', '.join(names[:shown])}{more})"
+
+
 def summary(model: Any, n_trials: int) -> str:
     """One line on a fitted model: segments, SEG-2 c, f and k."""
     import math
@@ -548,7 +559,9 @@ def summary(model: Any, n_trials: int) -> str:
     )
     empty = getattr(model, "n_trials_without_segments_", 0)
     short = getattr(model, "n_short_trials_", 0)
-    notes = f"; {empty} trial(s) without a segment" if empty else ""
+    notes = (
+        f"; {empty} trial(s) without a segment{_trials_without_segments(model)}" if empty else ""
+    )
     notes += f"; {short} trial(s) shorter than the filter padding (padded less)" if short else ""
     inertia = (
         f"{model.inertia_ * deg2:.4g} deg^2"

@@ -32,8 +32,12 @@ def run(args: argparse.Namespace) -> int:
     source = common.generated_source(args)
     common.model_from_args(args)  # checks the options before the long work
 
+    quiet = bool(getattr(args, "quiet", False))
+
     def say(text: str = "") -> None:
-        print(text, flush=True)
+        """The tables and scores as they come (not with --quiet: the files hold them)."""
+        if not quiet:
+            print(text, flush=True)
 
     with (
         outputs.atomic_folder(out, "demo") as tmp,
@@ -79,11 +83,16 @@ def run(args: argparse.Namespace) -> int:
 
         k_model = common.model_from_args(args, n_clusters=n_true)
         k_model.fit(trials, source=source)
-        cls = score_against_truth(k_model, trials)
-        say(f"Classification at k = {n_true} (number of true stroke kinds), SEG-2 segments: {cls}")
+        # The page and the console show the same two scores under the same names.
+        cls = (
+            f"SEG-2 model (k = {models['seg2'].n_primitives}): "
+            f"{score_against_truth(models['seg2'], trials)}; at k = {n_true} (number of true "
+            f"stroke kinds): {score_against_truth(k_model, trials)}"
+        )
+        say(f"Segment primitives vs true stroke labels: {cls}")
 
         st.step("primitives on the humanoid")
-        tmp_gifs = _demo_sim(models["seg2"], tmp, args)
+        tmp_gifs = _demo_sim(models["seg2"], tmp, args, trials)
         st.step("report")
         write_report(
             models["seg2"],
@@ -93,6 +102,7 @@ def run(args: argparse.Namespace) -> int:
             comparison=comparison,
             gifs=tmp_gifs,
             seg_scores=scores,
+            classification=cls,
         )
         gifs = [outputs.moved(g, tmp, out) for g in tmp_gifs]
     elapsed = time.perf_counter() - t0
@@ -124,15 +134,18 @@ def paper_models(
         yield method, model.fit(trials, source=source)
 
 
-def _demo_sim(model: Any, out_dir: Path, args: argparse.Namespace) -> list[Path]:
+def _demo_sim(model: Any, out_dir: Path, args: argparse.Namespace, trials: Any) -> list[Path]:
     if args.no_sim:
         return []
     try:
-        from visprim.sim.showcase import demo_primitives
+        from visprim.sim.showcase import demo_primitives, primitive_postures
     except ImportError as exc:
         log.warning("the humanoid simulation is not available (%s); no primitive GIFs", exc)
         return []
-    return list(demo_primitives(model, out_dir / "primitives", n=args.sim_primitives))
+    # Posture-relative primitives are played where their segments were made.
+    postures = primitive_postures(model, trials) if model.offsets == "mean" else None
+    gifs = demo_primitives(model, out_dir / "primitives", n=args.sim_primitives, postures=postures)
+    return list(gifs)
 
 
 def register(sub: Any) -> None:

@@ -22,15 +22,41 @@ def read_recording(args: argparse.Namespace, path: str, model: Any) -> Any:
     return read(path, arm, **opts)
 
 
+#: Smallest video panel, pixels (as :mod:`visprim.sim.render` draws them).
+MIN_SIZE = 64
+_RECORDING_SUFFIXES = (".bvh", ".amc", ".c3d", ".csv", ".trc")
+
+
+def _folder_message(what: str, folder: Path) -> str:
+    """The error for a folder given where one file is expected, naming what is inside."""
+    if what == "model file":
+        return f"model file {str(folder)!r} is a folder; give the .npz file `visprim learn` wrote"
+    inside = sorted(
+        p.name for p in folder.iterdir() if p.is_file() and p.suffix.lower() in _RECORDING_SUFFIXES
+    )
+    hint = (
+        f" ({len(inside)} recordings inside, e.g. {str(folder / inside[0])!r})"
+        if inside
+        else " (no recording inside)"
+    )
+    return f"recording {str(folder)!r} is a folder{hint}; imitate takes one recording file"
+
+
 def run(args: argparse.Namespace) -> int:
     """``visprim imitate MODEL RECORDING --out DIR``; see :mod:`visprim.imitate`."""
     from visprim.progress import stages
     from visprim.sim.video import VIDEO_FORMATS, check_video_path
 
     for what, path in (("model file", args.model), ("recording", args.recording)):
+        if Path(path).is_dir():
+            raise common.UsageError(_folder_message(what, Path(path)))
         if not Path(path).is_file():
             raise common.UsageError(f"{what} {path!r} not found")
     video = None if args.no_video else args.video
+    if video is not None and args.size < MIN_SIZE:
+        raise common.UsageError(
+            f"--size {args.size}: the video's panels must be at least {MIN_SIZE} pixels"
+        )
     if video is not None:
         try:
             check_video_path(video)

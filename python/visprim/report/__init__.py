@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from matplotlib.figure import Figure
 
 from visprim.accuracy import ErrorTables
 from visprim.classify import score_against_truth
@@ -39,8 +40,16 @@ from visprim.report.html import (
 from visprim.report.paper import tables_in_degrees
 from visprim.segment import corpus_boundary_scores, truth_pause_halfwidths, zvc
 from visprim.trial import Trial
+from visprim.vectors import to_curves
 
-__all__ = ["Report", "repetitions_text", "segmentation_scores", "write_report"]
+__all__ = [
+    "Report",
+    "model_figures",
+    "primitive_curves",
+    "repetitions_text",
+    "segmentation_scores",
+    "write_report",
+]
 
 #: Frames flagged at each end of a trial in Fig. 6: the zero-phase filter's edge transients
 #: (a 10th-order Butterworth at 0.25 of Nyquist has a group delay of about 12 frames).
@@ -107,15 +116,42 @@ def format_segmentation_scores(scores: dict[str, tuple[float, float, float]]) ->
     return "\n".join(lines) + "\n"
 
 
-def _pick_trial(corpus_names: list[str], counts: np.ndarray, name: str | None) -> int:
+def _pick_trial(
+    corpus_names: list[str],
+    counts: np.ndarray,
+    name: str | None,
+    mixed: np.ndarray | None = None,
+) -> int:
     if name is not None:
         if name not in corpus_names:
             raise ValueError(f"report: no trial named {name!r} among the {len(corpus_names)} given")
         return corpus_names.index(name)
     # An example with several segments (deterministic): the first trial with 4 to 8 SEG-2
-    # segments, else the one with the most.
-    good = np.flatnonzero((counts >= 4) & (counts <= 8))
-    return int(good[0]) if good.size else int(np.argmax(counts))
+    # segments whose Fig. 5 shows both SEG-1 segments and frames outside them (``mixed``),
+    # else the first with 4 to 8 SEG-2 segments, else the one with the most.
+    good = (counts >= 4) & (counts <= 8)
+    if mixed is not None and np.any(good & mixed):
+        return int(np.flatnonzero(good & mixed)[0])
+    if np.any(good):
+        return int(np.flatnonzero(good)[0])
+    return int(np.argmax(counts))
+
+
+#: Fig. 5 shows "both kinds" when SEG-1 segments cover at least one frame and at most this
+#: share of the trial.
+MIXED_MAX_COVER = 0.9
+
+
+def _seg1_mixed(model: PrimitiveModel, trials: list[Trial]) -> np.ndarray:
+    """Per trial: whether SEG-1 (with the model's settings) finds a segment and leaves part
+    of the trial outside its segments, so that Fig. 5 has coloured and grey parts."""
+    corpus = model.prepare(trials, segmentation="seg1")
+    out = np.zeros(len(trials), dtype=bool)
+    for i, (t, segs) in enumerate(zip(corpus.times, corpus.segments, strict=True)):
+        span = float(t[-1] - t[0]) if t.size > 1 else 0.0
+        if segs.shape[0] and span > 0:
+            out[i] = float(np.sum(segs[:, 1] - segs[:, 0])) <= MIXED_MAX_COVER * span
+    return out
 
 
 def write_report(
@@ -173,7 +209,8 @@ def write_report(
             f"Model: {model.n_primitives} primitives (k-means clusters) in the space of the first "
             f"{model.n_components} eigenvectors of {model.n_training_segments_} training segments "
             f"({method_label(params['segmentation'])}), each resampled to {model.n_samples} "
-            f"samples per angle ({model.dim}-D vectors)."
+            f"samples per channel ({model.dim}-D vectors of "
+            f"{figures.Channels.of(model).what})."
         )
         + f'<p class="note">{html_escape(UNITS_NOTE)}</p>'
     )
@@ -215,6 +252,19 @@ def write_report(
                 "dropped eigenvalues; total = projection + clustering (the residuals are "
                 "orthogonal)."
             )
+            + (
+                ""
+                if model.features == "zyz"
+                else '<p class="note">'
+                + html_escape(
+                    "This model's vectors hold unit-vector components of the upper arm and "
+                    "forearm, not angles. A component that changes by δ turns its bone by "
+                    "about δ radians, so the tables give the squared component errors as deg² "
+                    f"of bone direction: (component × 180/π)², {math.degrees(1.0) ** 2:.0f} "
+                    "times the squared components of Fig. 7."
+                )
+                + "</p>"
+            )
             + "".join(table_html),
         )
     for heading, text in extra_sections:
@@ -236,38 +286,37 @@ def write_report(
         )
 
     # Model figures -------------------------------------------------------------------
-    f_eig = figures.plot_eigenvalues(
-        out / "eigenvalues.png", model.eigenvalues_, model.n_components
-    )
-    f_vec = figures.plot_eigenvectors(
-        out / "eigenvectors.png", model.eigenvectors_, model.eigenvalues_
-    )
-    k = model.n_primitives
-    prim = np.stack([model.primitive_angles(i) for i in range(k)])
-    counts = np.bincount(model.labels_, minlength=k)
-    f_prim = figures.plot_primitives(
-        out / "primitives.png", prim, counts, model.primitive_durations_
-    )
-    rep.files += [f_eig, f_vec, f_prim]
+    ch = figures.Channels.of(model)
+    drawn = model_figures(model)
+    for name, fig in drawn.items():
+        rep.files.append(figures.save_figure(fig, out / name))
+    f_eig, f_vec, f_prim = (out / name for name in drawn)
     page.add(
         "Principal components",
         figure(
             f_eig.name,
-            "Fig. 7: eigenvalues of the covariance of the segment vectors (deg², log "
-            "scale) and the variance left out by the first f eigenvectors (log scale).",
+            "Fig. 7: eigenvalues of the covariance of the segment vectors "
+            f"({ch.variance_unit}, log scale) and the variance left out by the first f "
+            "eigenvectors (log scale).",
         )
         + figure(
             f_vec.name,
-            "Fig. 8: the first four unit eigenvectors, each drawn as its four angle blocks "
-            "of 100 components.",
+            f"Fig. 8: the first four unit eigenvectors, each drawn as {ch.n} curves of "
+            f"{model.n_samples} components, one per channel of the segment vectors: "
+            f"{ch.what}.",
         ),
+    )
+    rel = (
+        ", as changes from the segment's mean posture (the vectors hold shapes)"
+        if ch.offsets == "mean"
+        else ""
     )
     page.add(
         "Primitives",
         figure(
             f_prim.name,
-            "Fig. 9: cluster centres reconstructed as angle curves, the primitives; "
-            "titles give the number of member segments and their mean duration.",
+            f"Fig. 9: cluster centres reconstructed as curves of {ch.what}{rel}: the "
+            "primitives; titles give the number of member segments and their mean duration.",
         ),
     )
 
@@ -289,7 +338,12 @@ def write_report(
         )
         page.add(
             "Primitives on the simulated humanoid",
-            paragraph("Primitives played back on Adonis (DART simulation).")
+            paragraph(
+                "Primitives played back on Adonis (DART simulation): by default the ones "
+                "whose upper arm and forearm travel furthest (the bones' path length, in "
+                "the titles), not the most populated, which are near rest; `visprim demo` "
+                "plays primitives of posture-relative vectors at their segments' mean posture."
+            )
             + f'<div class="gifs">{imgs}</div>',
         )
 
@@ -302,6 +356,33 @@ def write_report(
     return rep
 
 
+def primitive_curves(model: PrimitiveModel) -> np.ndarray:
+    """The primitives ``E_f c + s̄`` as curves of the model's own channels,
+    ``(k, n_samples, C)`` (radians, or unit-vector components for a direction model): what
+    Fig. 9 draws. Not turned into angles: inverse kinematics of a direction primitive held
+    relative to its mean posture has no meaning, and unwrapping would add whole turns."""
+    rebuilt = model.cluster_centers_ @ model.components_.T + model.mean_
+    return to_curves(rebuilt, model.n_channels)
+
+
+def model_figures(model: PrimitiveModel) -> dict[str, Figure]:
+    """Figs. 7–9 of a fitted model, by file name (``eigenvalues.png``,
+    ``eigenvectors.png``, ``primitives.png``), drawn for the model's features."""
+    ch = figures.Channels.of(model)
+    counts = np.bincount(model.labels_, minlength=model.n_primitives)
+    return {
+        "eigenvalues.png": figures.eigenvalues_figure(
+            model.eigenvalues_, model.n_components, channels=ch
+        ),
+        "eigenvectors.png": figures.eigenvectors_figure(
+            model.eigenvectors_, model.eigenvalues_, channels=ch
+        ),
+        "primitives.png": figures.primitives_figure(
+            primitive_curves(model), counts, model.primitive_durations_, channels=ch
+        ),
+    }
+
+
 def _trial_figures(
     model: PrimitiveModel, trials: list[Trial], out: Path, page: Page, trial_name: str | None
 ) -> list[Path]:
@@ -310,7 +391,8 @@ def _trial_figures(
     if counts is None:
         # Count SEG-2 segments for the choice of the example trial.
         counts = model.prepare(trials, segmentation="seg2").segmentation.counts()
-    i = _pick_trial(corpus.names, counts, trial_name)
+    mixed = _seg1_mixed(model, trials) if trial_name is None else None
+    i = _pick_trial(corpus.names, counts, trial_name, mixed)
     trial = trials[i]
     times = corpus.times[i]
     angles = corpus.angles[i]
@@ -351,6 +433,7 @@ def _trial_figures(
             truth_boundaries=truth_b,
             edge_s=EDGE_FRAMES * float(np.median(np.diff(times))),
             title=f"Fig. 6: trial {name}, SEG-2 (z(t) below c delimits the segments)",
+            channels=figures.Channels.of(model),
         )
     )
     # Fig. 11: the whole movement.
@@ -396,6 +479,12 @@ def _trial_figures(
             errors_deg=(_rms_deg(rp, angles[mask]), _rms_deg(rc, angles[mask])),
         )
     )
+    z_text = (
+        "z(t) = sum of the squared angular velocities of the four angles"
+        if model.features == "zyz"
+        else "z(t) = |u̇|² + |ḟ|², the summed squared angular speeds of the upper arm and "
+        "forearm directions (the channels SEG-2 runs on)"
+    )
     page.add(
         "Segmentation",
         paragraph(
@@ -410,7 +499,7 @@ def _trial_figures(
         )
         + figure(
             "seg2_threshold.png",
-            "Fig. 6: z(t) = sum of squared angular velocities, (deg/s)², with the SEG-2 "
+            f"Fig. 6: {z_text}, (deg/s)², with the SEG-2 "
             "threshold c in the same unit; the movement is cut inside each dip below c. "
             "Shaded: the trial's ends, where the zero-phase filter's edge transients "
             "dominate z(t).",

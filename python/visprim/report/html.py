@@ -10,7 +10,8 @@ from pathlib import Path
 
 from visprim.accuracy import ErrorTable, _fmt
 
-_CSS = """
+#: The style sheet of the report pages (``visprim report`` and ``visprim evaluate``).
+CSS = """
 body { font-family: system-ui, sans-serif; max-width: 1150px; margin: 2em auto; padding: 0 1em;
        color: #222; line-height: 1.45; }
 h1 { font-size: 1.6em; } h2 { font-size: 1.25em; margin-top: 2em; border-bottom: 1px solid #ddd; }
@@ -23,6 +24,8 @@ pre { background: #f7f7f7; padding: 0.8em; overflow-x: auto; font-size: 0.85em; 
 .note { font-size: 0.85em; color: #555; }
 nav.toc { background: #fafafa; border: 1px solid #e4e4e4; padding: 0.5em 1.2em; }
 nav.toc ol { margin: 0.3em 0; } .gifs img { max-width: 32%; margin-right: 1%; }
+.scroll { overflow-x: auto; max-width: 100%; } .scroll table { margin: 0.4em 0; }
+td:first-child, th:first-child { text-align: left; }
 """
 
 
@@ -61,7 +64,7 @@ class Page:
             "<!DOCTYPE html>",
             '<html lang="en"><head><meta charset="utf-8">',
             f"<title>{html.escape(self.title)}</title>",
-            f"<style>{_CSS}</style></head><body>",
+            f"<style>{CSS}</style></head><body>",
             f"<h1>{html.escape(self.title)}</h1>",
             self.intro,
         ]
@@ -96,7 +99,7 @@ def _table_html(rows: Sequence[Sequence[str]]) -> str:
     body = "".join(
         "<tr>" + "".join(f"<td>{_inline(c)}</td>" for c in r) + "</tr>" for r in rows[1:]
     )
-    return f"<table><tr>{head}</tr>{body}</table>"
+    return f'<div class="scroll"><table><tr>{head}</tr>{body}</table></div>'
 
 
 def markdown_to_html(text: str) -> str:

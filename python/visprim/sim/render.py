@@ -237,17 +237,38 @@ class Painter:
         draw.text(xy, text, font=font, fill=fill, anchor=anchor)
 
 
-class _Label:
-    """A text rendered once and pasted on every frame."""
+#: Font sizes (pixels at the output size) of the frame texts: title, figures, clock.
+TITLE_PX = 16
+TEXT_PX = 14
 
-    def __init__(self, text: str, size: float, anchor: str, xy: tuple[float, float], box: bool):
+
+class _Label:
+    """A text rendered once and pasted on every frame (lines split at ``\\n``); ``width``
+    pixels, if given, makes its box a band that wide (hiding what lies under it), the text
+    centred in it."""
+
+    def __init__(
+        self,
+        text: str,
+        size: float,
+        anchor: str,
+        xy: tuple[float, float],
+        box: bool,
+        width: int | None = None,
+    ):
         probe = ImageDraw.Draw(Image.new("RGB", (1, 1)))
         font = _font(int(round(size)))
-        x0, y0, x1, y1 = probe.textbbox((0, 0), text, font=font, anchor="la")
+        x0, y0, x1, y1 = probe.multiline_textbbox((0, 0), text, font=font, spacing=3)
         pad = 3 if box else 0
         w, h = int(x1 - x0) + 2 * pad + 1, int(y1 - y0) + 2 * pad + 1
+        left = pad - x0
+        if width is not None and width > w:
+            left += (width - w) // 2
+            w = width
         self.image = Image.new("RGBA", (w, h), (255, 255, 255, 255 if box else 0))
-        ImageDraw.Draw(self.image).text((pad - x0, pad - y0), text, font=font, fill=(40, 40, 40))
+        ImageDraw.Draw(self.image).multiline_text(
+            (left, pad - y0), text, font=font, fill=(40, 40, 40), spacing=3, align="center"
+        )
         x, y = xy
         x -= {"l": 0, "m": w / 2, "r": w}[anchor[0]]
         y -= {"a": 0, "m": h / 2, "d": h}[anchor[1]]
@@ -276,7 +297,7 @@ class PlaybackDrawer:
         w, h = size
         self.labels = []
         if title:
-            self.labels.append(_Label(title, 11, "la", (4, 4), False))
+            self.labels.append(_Label(title, TITLE_PX, "la", (4, 4), False))
         self.ref_2d = p.project(playback.hand_reference)
         self.ref_runs = p.dash_runs(self.ref_2d, 6.0 * SUPERSAMPLE)
         self.via_2d = p.project(playback.hand_via)
@@ -285,14 +306,15 @@ class PlaybackDrawer:
             footer
             if footer is not None
             else (
-                f"RMS {playback.rms_error_deg:.1f}°  max {playback.max_error_deg:.1f}°  "
-                f"{playback.completion_time:.2f} s / {playback.movement_duration:.2f} s  "
-                f"via {playback.n_reached}/{playback.n_via}"
+                f"tracking error RMS {playback.rms_error_deg:.1f}°, max "
+                f"{playback.max_error_deg:.1f}°\ntook {playback.completion_time:.2f} s for "
+                f"{playback.movement_duration:.2f} s · via points {playback.n_reached}/"
+                f"{playback.n_via}"
             )
         )
 
         if self.footer:
-            self.labels.append(_Label(self.footer, 9.5, "md", (w / 2, h - 3), True))
+            self.labels.append(_Label(self.footer, TEXT_PX, "md", (w / 2, h), True, width=w))
         # Bodies that never move (the pelvis and legs) are projected once.
         frames = playback.frames
         still = np.abs(frames - frames[:1]).max(axis=(0, 2, 3)) < 1e-12
@@ -325,7 +347,8 @@ class PlaybackDrawer:
         out = p.finish(image)
         for label in self.labels:
             label.paste(out)
-        p.text(out, (p.size[0] - 4, 4), f"t = {t if clock is None else clock:.2f} s", 11, "ra")
+        clock_text = f"t = {t if clock is None else clock:.2f} s"
+        p.text(out, (p.size[0] - 4, 4), clock_text, TEXT_PX, "ra")
         return out
 
 

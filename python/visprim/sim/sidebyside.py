@@ -20,7 +20,15 @@ from numpy.typing import NDArray
 from PIL import Image, ImageDraw
 
 from visprim.sim.model import LINKS, SHOULDER_OFFSET, WAIST_HEIGHT
-from visprim.sim.render import SUPERSAMPLE, Camera, Painter, PlaybackDrawer, _Label
+from visprim.sim.render import (
+    SUPERSAMPLE,
+    TEXT_PX,
+    TITLE_PX,
+    Camera,
+    Painter,
+    PlaybackDrawer,
+    _Label,
+)
 from visprim.sim.video import write_video
 
 #: Where the human's shoulders are drawn: Adonis's right (then left) shoulder at rest
@@ -82,9 +90,10 @@ class SideBySide:
             size,
             title=f"Adonis: {what} {seq if imitation.source == 'primitives' else ''}".strip(),
             footer=(
-                f"vs human {adonis['vs_human_joint_rms_deg']['overall']:.1f}°  "
-                f"vs rebuild {adonis['vs_rebuild_joint_rms_deg']['overall']:.1f}°  "
-                f"time {adonis['time_ratio']:.2f}x  via {pb.n_reached}/{pb.n_via}"
+                f"Adonis vs human, bone directions: {adonis['vs_human_direction_rms_deg']:.1f}° "
+                f"RMS\nholding still instead: {m['headline']['still_posture_rms_deg']:.1f}°\n"
+                f"tracks its rebuild to {adonis['vs_rebuild_joint_rms_deg']['overall']:.1f}° · "
+                f"time {adonis['time_ratio']:.2f}x · via {pb.n_reached}/{pb.n_via}"
             ),
         )
         self.painter = Painter(cam, size)
@@ -105,17 +114,18 @@ class SideBySide:
             for run in p.dash_runs(self.human_2d[:, 4 * a + 3], 6.0 * SUPERSAMPLE)
         ]
         w, h = size
-        rb = m["rebuild_vs_human_rms_deg"]["overall"]
+        rb = m["rebuild_vs_human_direction_rms_deg"]
         cov = m["coverage"]
         self.labels = [
-            _Label(f"human: {imitation.name}", 11, "la", (4, 4), False),
+            _Label(f"human: {imitation.name}", TITLE_PX, "la", (4, 4), False),
             _Label(
-                f"rebuild vs human {rb:.1f}° RMS  uncovered {cov['uncovered_s']:.2f} s "
-                f"({cov['uncovered_percent']:.0f}%)",
-                9.5,
+                f"rebuild vs human, bone directions: {rb:.1f}° RMS\n"
+                f"not in a segment: {cov['uncovered_s']:.2f} s ({cov['uncovered_percent']:.0f}%)",
+                TEXT_PX,
                 "md",
-                (w / 2, h - 3),
+                (w / 2, h),
                 True,
+                width=w,
             ),
         ]
         self.start = float(imitation.rebuild.start - trial.times[0])
@@ -142,7 +152,7 @@ class SideBySide:
         out = p.finish(image)
         for label in self.labels:
             label.paste(out)
-        p.text(out, (self.size[0] - 4, 4), f"t = {tau:.2f} s", 11, "ra")
+        p.text(out, (self.size[0] - 4, 4), f"t = {tau:.2f} s", TEXT_PX, "ra")
         return out
 
     def frame(self, index: int) -> Image.Image:
