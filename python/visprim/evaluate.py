@@ -56,7 +56,7 @@ from numpy.typing import NDArray
 
 from visprim import kernels
 from visprim.accuracy import angular_error_deg
-from visprim.atomic import write_text
+from visprim.atomic import atomic_file, write_text
 from visprim.classify import MotionClassifier, arm_directions, dtw_matrix, group_folds
 from visprim.features import direction_rms_deg
 from visprim.io import BANDAI_NAME, FORMATS
@@ -834,13 +834,7 @@ def _write_figures(
             ),
         ):
             path = out / f"{kind}_{name}.png"
-            fd, tmp = tempfile.mkstemp(dir=out, prefix=f".{path.name}.", suffix=".png")
-            os.close(fd)
-            try:
-                figures.save_figure(fig, Path(tmp))
-                os.replace(tmp, path)
-            except BaseException:
-                Path(tmp).unlink(missing_ok=True)
-                raise
+            with atomic_file(path) as tmp:
+                figures.save_figure(fig, tmp)
             drawn.append((r.name, kind, path, caption))
     return drawn
