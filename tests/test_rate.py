@@ -18,10 +18,13 @@ from visprim.rate import (
     fit_codebook,
     joint_rms_deg,
     keyframe_rebuild,
+    movement_numbers,
     rate_markdown,
     rebuild_segments,
     segment_numbers,
     split_long,
+    unit_bones,
+    unit_posture,
     warp_curves,
     write_rate_report,
 )
@@ -46,6 +49,23 @@ def test_numbers_per_segment_are_counted() -> None:
     assert segment_numbers("projection", 6, 30) == 37
     with pytest.raises(ValueError, match="unknown family"):
         segment_numbers("paper", 6)
+    # Bridges: start, id and duration per segment, two unit directions per boundary.
+    assert movement_numbers("bridge", 3, 6) == 1 + 3 * 2 + 4 * 4
+    assert movement_numbers("bridge+residual", 2, 6, 5) == 1 + 2 * 7 + 3 * 4
+    assert movement_numbers("nearest", 3, 4) == 1 + 3 * 6
+
+
+def test_unit_posture_restores_unit_bones() -> None:
+    """A curve of unit bones is rebuilt from its shape and the unit directions of its mean:
+    the rebuilt offset has the right length on average (exact for a constant-length
+    shape, here a bone turning on a cone)."""
+    u = np.linspace(0, 2 * np.pi, 50, endpoint=False)
+    cone = np.stack([0.6 * np.cos(u), 0.6 * np.sin(u), np.full_like(u, 0.8)], axis=1)
+    curve = np.concatenate([cone, cone[:, [1, 0, 2]]], axis=1)[None]  # (1, 50, 6)
+    mean = curve.mean(axis=1)
+    shape = curve - mean[:, None, :]
+    offset = unit_posture(unit_bones(mean), shape)
+    np.testing.assert_allclose(offset, mean, atol=1e-12)
 
 
 def test_all_residual_coefficients_rebuild_the_projection() -> None:
@@ -186,3 +206,16 @@ def test_rate_benchmark_counts_and_report(tmp_path: Path) -> None:
     assert len(lines) == 1 + len(summary)
     with pytest.raises(ValueError, match="unknown description"):
         evaluate_rate(bench, families=["mean"])
+    # Unit postures store 4 numbers a segment instead of 6; bridges their boundaries.
+    unit = evaluate_rate(
+        bench, families=["nearest", "bridge"], model_params=SMALL_MODEL, posture="unit"
+    )
+    for a, b in zip(
+        [r for r in unit.rows if r["family"] == "nearest" and r["param"] == 10], near, strict=True
+    ):
+        n_seg = (b["numbers"] - 1) // 8
+        assert a["numbers"] == 1 + 6 * n_seg
+    for r in unit.rows:
+        if r["family"] == "bridge":
+            n_seg = (r["numbers"] - 5) // 6
+            assert r["numbers"] == 1 + 2 * n_seg + 4 * (n_seg + 1)

@@ -95,6 +95,9 @@ FAMILIES: tuple[str, ...] = (
     "residual",
     "projection",
     "warp",
+    "bridge",
+    "bridge+gain",
+    "bridge+residual",
     "keyframes-angles",
     "keyframes-directions",
     "dct-angles",
@@ -103,6 +106,9 @@ FAMILIES: tuple[str, ...] = (
 #: Where primitive centres live: the k-means centres in the projection space (the paper),
 #: or the means of the members' whole segment vectors.
 CENTRES: tuple[str, ...] = ("projection", "members")
+#: How a segment's posture is stored: each channel's mean (6 numbers per arm), or the two
+#: bone directions of that mean as unit vectors (4 numbers; :func:`unit_posture`).
+POSTURES: tuple[str, ...] = ("mean", "unit")
 #: Warp values tried per segment (``u → u + w u (1 − u)``).
 WARP_GRID: NDArray[np.float64] = np.linspace(-0.8, 0.8, 9)
 #: Nearest primitives among which the warped primitive is chosen.
@@ -118,7 +124,10 @@ def segment_numbers(family: str, n_channels: int, m: int = 0) -> int:
     """Numbers stored per segment by a primitive description of ``family``: the primitive
     id, the duration and ``n_channels`` posture numbers, plus a gain (``nearest+gain``),
     ``m`` coefficients (``residual``), or a gain and one warp number (``warp``);
-    ``projection`` stores ``m`` coefficients, the duration and the posture (no id)."""
+    ``projection`` stores ``m`` coefficients, the duration and the posture (no id).
+    ``bridge`` descriptions store no posture per segment (their boundary postures are
+    counted by :func:`movement_numbers`): the id and duration, plus a gain or ``m``
+    coefficients."""
     base = 2 + int(n_channels)
     if family == "nearest":
         return base
@@ -130,7 +139,59 @@ def segment_numbers(family: str, n_channels: int, m: int = 0) -> int:
         return base + 2
     if family == "projection":
         return 1 + int(n_channels) + int(m)
+    if family == "bridge":
+        return 2
+    if family == "bridge+gain":
+        return 3
+    if family == "bridge+residual":
+        return 2 + int(m)
     raise ValueError(f"segment_numbers: unknown family {family!r}")
+
+
+#: Numbers of one boundary posture of the bridge descriptions: two unit bone directions.
+BOUNDARY_NUMBERS = 4
+
+
+def movement_numbers(family: str, n_segments: int, n_channels: int, m: int = 0) -> int:
+    """All the numbers of one movement of ``n_segments`` consecutive segments: its start
+    time, each segment's numbers (:func:`segment_numbers`) and, for the ``bridge``
+    descriptions, the posture at each of the ``n_segments + 1`` boundaries (two unit bone
+    directions, :data:`BOUNDARY_NUMBERS`)."""
+    total = 1 + int(n_segments) * segment_numbers(family, n_channels, m)
+    if family.startswith("bridge"):
+        total += BOUNDARY_NUMBERS * (int(n_segments) + 1)
+    return total
+
+
+def bridge_lines(
+    curves: NDArray[np.float64], ends: tuple[NDArray[np.float64], NDArray[np.float64]] | None
+) -> NDArray[np.float64]:
+    """Straight lines ``(N, n, C)`` from each segment's first to its last posture: those of
+    ``curves`` ``(N, n, C)``, or the given ``ends`` ``((N, C), (N, C))``."""
+    first, last = (curves[:, 0, :], curves[:, -1, :]) if ends is None else ends
+    u = np.linspace(0.0, 1.0, curves.shape[1])[None, :, None]
+    return np.asarray(first[:, None, :] * (1.0 - u) + last[:, None, :] * u)
+
+
+def unit_posture(
+    directions: NDArray[np.float64], shapes: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Posture offsets ``(N, C)`` rebuilt from the unit bone directions ``(N, C)`` of each
+    segment's mean posture and its rebuilt zero-mean shape ``(N, n, C)``: each bone's
+    direction scaled by ``sqrt(1 − mean |shape|²)``, the length that makes the mean squared
+    length of ``offset + shape`` one, as it is for the unit bones of a movement."""
+    n, _, c = shapes.shape
+    sq = np.mean(np.sum(shapes.reshape(n, -1, c // 3, 3) ** 2, axis=3), axis=1)  # (N, bones)
+    scale = np.sqrt(np.clip(1.0 - sq, 0.0, 1.0))
+    return np.asarray((directions.reshape(n, -1, 3) * scale[:, :, None]).reshape(n, c))
+
+
+def unit_bones(values: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(..., 6 n_arms)`` bone directions scaled to unit length per bone."""
+    v = values.reshape(*values.shape[:-1], -1, 3)
+    return np.asarray(v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)).reshape(
+        values.shape
+    )
 
 
 # ---------------------------------------------------------------------------- errors
@@ -500,9 +561,10 @@ def _fold(
     centres: str,
     max_stroke: float | None,
     rows: list[dict[str, Any]],
+    posture_mode: str = "mean",
 ) -> None:
     from visprim.model import PrimitiveModel
-    from visprim.vectors import to_curves
+    from visprim.vectors import to_curves, to_vectors
 
     params = {**params, "offsets": "mean", "features": "directions"}
     seg_model = PrimitiveModel(**params)
@@ -547,7 +609,17 @@ def _fold(
             )
         )
         row += s.shape[0]
+    # Bridges: each segment's shape less the line between its end postures (unit bone
+    # directions, what is stored), rebuilt from primitives of such shapes.
+    absolute = to_curves(x, c) + posture[:, None, :]
+    lines = bridge_lines(absolute, (unit_bones(absolute[:, 0, :]), unit_bones(absolute[:, -1, :])))
+    bridge: tuple[Codebook, NDArray[np.float64]] | None = None
     for family in families:
+        if bridge is None and family.startswith("bridge"):
+            bridge = (
+                _bridge_codebook(train_sv, c, ks, seg_model, centres),
+                to_vectors(absolute - lines),
+            )
         if family.startswith(("keyframes", "dct")):
             for rate in BASELINE_RATES:
                 for mv in movements:
@@ -561,16 +633,53 @@ def _fold(
             "warp": RATE_K,
             "residual": m_values,
             "projection": m_values,
+            "bridge": RATE_K,
+            "bridge+gain": RATE_K,
+            "bridge+residual": m_values,
         }[family]
+        bridged = family.startswith("bridge")
+        centers = bridge[0].centers if bridged and bridge is not None else book.centers
         for p in params_of:
-            if family not in ("residual", "projection") and p not in book.centers:
+            if family not in ("residual", "projection", "bridge+residual") and p not in centers:
                 continue
-            rebuilt = rebuild_segments(book, x, c, family, p)
-            curves = to_curves(rebuilt, c) + posture[:, None, :]
+            inner = _BRIDGE_INNER.get(family, family)
+            if bridged and bridge is not None:
+                rebuilt = rebuild_segments(bridge[0], bridge[1], c, inner, p)
+                curves = to_curves(rebuilt, c) + lines
+            else:
+                rebuilt = rebuild_segments(book, x, c, family, p)
+                shapes = to_curves(rebuilt, c)
+                curves = shapes + (
+                    posture[:, None, :]
+                    if posture_mode == "mean"
+                    else unit_posture(unit_bones(posture), shapes)[:, None, :]
+                )
             for mv in movements:
                 values = on_clock(curves[mv.rows], mv.segments, mv.times)
-                numbers = 1 + mv.segments.shape[0] * segment_numbers(family, c, p)
+                n_post = c if bridged or posture_mode == "mean" else c // 3 * 2
+                numbers = movement_numbers(family, mv.segments.shape[0], n_post, p)
                 _score(rows, mv, family, p, numbers, directions=values)
+
+
+#: The primitive description that rebuilds a bridge's shape.
+_BRIDGE_INNER = {"bridge": "nearest", "bridge+gain": "nearest+gain", "bridge+residual": "residual"}
+
+
+def _bridge_codebook(
+    train_sv: Any, c: int, ks: Sequence[int], seg_model: Any, centres: str
+) -> Codebook:
+    """The codebook of the training segments' shapes less their end-to-end lines."""
+    from visprim.vectors import to_curves, to_vectors
+
+    absolute = to_curves(train_sv.vectors, c) + train_sv.offsets[:, None, :]
+    return fit_codebook(
+        to_vectors(absolute - bridge_lines(absolute, None)),
+        ks,
+        n_components=int(seg_model.n_components),
+        centres=centres,
+        n_init=3,
+        seed=int(seg_model.seed),
+    )
 
 
 def _baseline(rows: list[dict[str, Any]], mv: HeldOut, family: str, rate: float) -> None:
@@ -593,6 +702,7 @@ def evaluate_rate(
     families: Sequence[str] = FAMILIES,
     centres: str = "members",
     max_stroke: float | None = None,
+    posture: str = "mean",
     model_params: dict[str, Any] | None = None,
     on_fold: Callable[[str], None] | None = None,
 ) -> RateResult:
@@ -600,6 +710,8 @@ def evaluate_rate(
     (module docstring). ``model_params`` are :class:`~visprim.model.PrimitiveModel`
     parameters (filtering, segmentation, n_samples, n_components, seed; the vectors are
     always posture-relative bone directions)."""
+    if posture not in POSTURES:
+        raise ValueError(f"posture must be one of {list(POSTURES)}, got {posture!r}")
     bad = [f for f in families if f not in FAMILIES]
     if bad:
         raise ValueError(f"unknown description(s) {bad}; choose from {list(FAMILIES)}")
@@ -609,7 +721,7 @@ def evaluate_rate(
         bench.name,
         bench.group_by,
         order,
-        options={"centres": centres, "max_stroke": max_stroke},
+        options={"centres": centres, "max_stroke": max_stroke, "posture": posture},
     )
     for group in order:
         if on_fold:
@@ -625,6 +737,7 @@ def evaluate_rate(
             centres=centres,
             max_stroke=max_stroke,
             rows=result.rows,
+            posture_mode=posture,
         )
     return result
 
@@ -638,6 +751,7 @@ def rate_benchmark(
     families: Sequence[str] = FAMILIES,
     centres: str = "members",
     max_stroke: float | None = None,
+    posture: str = "mean",
     jobs: int | None = None,
     progress: bool | None = None,
 ) -> list[RateResult]:
@@ -672,6 +786,7 @@ def rate_benchmark(
                     families=families,
                     centres=centres,
                     max_stroke=max_stroke,
+                    posture=posture,
                     on_fold=step,
                 )
             )
@@ -771,3 +886,109 @@ def write_rate_report(results: Sequence[RateResult], out_dir: str | os.PathLike[
     finally:
         tmp.unlink(missing_ok=True)
     return paths
+
+
+# ---------------------------------------------------------------------------- one movement
+
+
+@dataclass(frozen=True)
+class Description:
+    """The description chosen for one movement's segments: ``family`` (:data:`FAMILIES`),
+    its ``m`` coefficients, the ``numbers`` it stores and the ``seconds`` it covers."""
+
+    family: str
+    m: int
+    numbers: int
+    seconds: float
+
+    @property
+    def numbers_per_s(self) -> float:
+        return self.numbers / self.seconds if self.seconds > 0 else float("inf")
+
+    @property
+    def label(self) -> str:
+        if self.family == "residual":
+            return f"nearest primitive + {self.m} residual coefficient(s)"
+        if self.family == "projection":
+            return f"own projection ({self.m} coefficients)"
+        return {"nearest": "nearest primitive", "nearest+gain": "nearest primitive × gain"}[
+            self.family
+        ]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "description": self.label,
+            "family": self.family,
+            "coefficients": self.m,
+            "numbers": self.numbers,
+            "seconds": self.seconds,
+            "numbers_per_s": self.numbers_per_s,
+        }
+
+
+def describe_segments(
+    model: Any,
+    vectors: NDArray[np.float64],
+    seconds: float,
+    *,
+    family: str | None = None,
+    budget: float | None = None,
+) -> tuple[NDArray[np.float64], Description]:
+    """One movement's segment vectors ``(N, d)`` (``seconds`` long) rebuilt through a fitted
+    :class:`~visprim.model.PrimitiveModel`, and the description used.
+
+    Without ``budget``: ``family`` (default the model's own, the nearest primitive, scaled
+    by its gain if ``model.amplitude``). With ``budget`` (numbers per second of movement):
+    of the nearest primitive, with its gain, with m = 1 … f − 1 residual coefficients and
+    the own projection (m = f), the one whose rebuild lies closest to the segments among
+    those that fit the budget. Posture numbers are counted for posture-relative models
+    (``offsets="mean"``); a model of absolute curves stores none.
+    """
+    from visprim.vectors import amplitude_gains
+
+    x = np.asarray(vectors, dtype=np.float64)
+    n_seg = x.shape[0]
+    f = int(model.n_components)
+    posture = int(model.n_channels) if model.offsets == "mean" else 0
+    p = model.transform(x)
+    labels, _ = model.assign(p)
+    centre = model.cluster_centers_[labels]
+    default = "nearest+gain" if model.amplitude else "nearest"
+
+    def rebuild(fam: str, m: int) -> NDArray[np.float64]:
+        if fam == "projection":
+            return np.asarray(p @ model.components_.T + model.mean_)
+        coef = centre.copy()
+        coef[:, :m] = p[:, :m]
+        out = np.asarray(coef @ model.components_.T + model.mean_)
+        if fam == "nearest+gain":
+            out = out * amplitude_gains(x, out)[:, None]
+        return out
+
+    def describe(fam: str, m: int) -> Description:
+        return Description(fam, m, movement_numbers(fam, n_seg, posture, m), float(seconds))
+
+    if budget is None:
+        fam = family or default
+        m = f if fam == "projection" else 0
+        if fam not in ("nearest", "nearest+gain", "projection"):
+            raise ValueError(f"family must be nearest, nearest+gain or projection, got {fam!r}")
+        return rebuild(fam, m), describe(fam, m)
+    options = [("nearest", 0)] + ([("nearest+gain", 0)] if model.offsets == "mean" else [])
+    options += [("residual", m) for m in range(1, f)] + [("projection", f)]
+    fitting = [describe(fam, m) for fam, m in options]
+    fitting = [d for d in fitting if d.numbers_per_s <= budget]
+    if not fitting:
+        least = describe("nearest", 0).numbers_per_s
+        raise ValueError(
+            f"budget {budget:g} numbers/s is below the smallest description of this movement "
+            f"({least:.1f} numbers/s: nearest primitive, {n_seg} segment(s) in {seconds:.2f} s)"
+        )
+    best: tuple[float, int, Description, NDArray[np.float64]] | None = None
+    for d in fitting:
+        r = rebuild(d.family, d.m)
+        err = float(np.sum((x - r) ** 2))
+        if best is None or (err, d.numbers) < (best[0], best[1]):
+            best = (err, d.numbers, d, r)
+    assert best is not None
+    return best[3], best[2]
