@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from visprim import PrimitiveModel
 from visprim.datasets import imitation_experiment
@@ -59,3 +60,27 @@ def test_a_budget_picks_the_best_description_that_fits(data) -> None:
         imitate(model, trial, play=False, budget=0.5 * rate)
     with pytest.raises(ValueError, match="budget picks the description"):
         imitate(model, trial, play=False, budget=100.0, source="projection")
+
+
+def test_two_arms_share_the_budget(data) -> None:
+    """Arms imitated one by one share one budget: the best combination that fits."""
+    from _motion_data import _two_arms
+
+    model, _ = data
+    s = np.linspace(0.0, 1.0, 90)
+    right = np.stack(
+        [0.4 + 0.8 * s, 0.5 + np.sin(np.pi * s), 0.2 * s, 0.4 + 0.6 * np.sin(2 * np.pi * s)], 1
+    )
+    left = np.stack([0.3 + 0 * s, 0.4 + 0.9 * np.sin(2 * np.pi * s) ** 2, 0 * s, 1.0 - 0.5 * s], 1)
+    both = _two_arms(right, left, "both")
+    plain = imitate(model, both, play=False)
+    d = plain.metrics["description"]
+    assert set(d["arms"]) == {"right", "left"}
+    assert d["numbers"] == sum(a["numbers"] for a in d["arms"].values())
+    budget = 1.5 * d["numbers_per_s"]
+    shared = imitate(model, both, play=False, budget=budget)
+    sh = shared.metrics["description"]
+    assert sh["numbers_per_s"] <= budget * (1 + 1e-9) and sh["numbers"] > d["numbers"]
+    assert _err(shared) < _err(plain)
+    with pytest.raises(ValueError, match="below the smallest description"):
+        imitate(model, both, play=False, budget=0.9 * d["numbers_per_s"])

@@ -428,6 +428,22 @@ def _described(model: Any, sv: Any, source: Source, budget: float | None) -> tup
     return describe_segments(model, sv.vectors, seconds, family=family, budget=budget)
 
 
+def _shares(model: Any, pieces: Sequence[Trial], budget: float | None) -> list[float | None]:
+    """Each piece's share of the ``budget`` (numbers per second of its own movement): the
+    budget itself for one piece, else the shares of the best combination of descriptions
+    (:func:`visprim.rate.share_budget`)."""
+    if budget is None or len(pieces) == 1:
+        return [budget] * len(pieces)
+    from visprim.rate import share_budget
+
+    parts = []
+    for t in pieces:
+        sv = model.vectorize(model.prepare([t]))
+        parts.append((sv.vectors, float(np.max(sv.ends) - np.min(sv.starts))))
+    span = max(sec for _, sec in parts)
+    return list(share_budget(model, parts, span, float(budget)))
+
+
 def _description_metrics(parts: Sequence[_Segmented], budget: float | None) -> dict[str, Any]:
     """The size of the description (numbers per second of movement), per arm and in all."""
     descs = [p.description for p in parts]
@@ -540,9 +556,10 @@ def imitate(
     play : run the simulation (False: rebuild and its errors only).
     budget : numbers per second of movement: rebuild through the best description that fits
         (nearest primitive, with its gain, with residual coefficients, or the segment's own
-        projection; :func:`visprim.rate.describe_segments`), shared evenly by the arms
-        imitated one by one. ``metrics["description"]`` states the size of the description
-        used, with or without a budget.
+        projection; :func:`visprim.rate.describe_segments`); arms imitated one by one share
+        it as the best combination of their descriptions (:func:`visprim.rate.share_budget`).
+        ``metrics["description"]`` states the size of the description used, with or without
+        a budget.
 
     Raises
     ------
@@ -568,8 +585,10 @@ def imitate(
     if budget is not None and source != "primitives":
         raise ValueError("budget picks the description through the primitives: leave source")
     pieces = split_arms(trial) if per_arm else [trial]
-    share = None if budget is None else float(budget) / len(pieces)
-    parts = [_segment_and_rebuild(model, t, source, name, share) for t in pieces]
+    shares = _shares(model, pieces, budget)
+    parts = [
+        _segment_and_rebuild(model, t, source, name, b) for t, b in zip(pieces, shares, strict=True)
+    ]
     times = parts[0].times
     human = np.concatenate([p.human for p in parts], axis=1)
     rebuild: Rebuild | ArmsRebuild = (

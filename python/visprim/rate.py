@@ -38,10 +38,13 @@ segment is rebuilt by a description (:data:`FAMILIES`):
     coordinates) sampled at equally spaced instants and joined by a cubic spline, or its
     first DCT-II coefficients, at the rates :data:`BASELINE_RATES`.
 
-Primitive centres are either the k-means centres in the f-D projection space (the paper,
-``centres="projection"``) or the means of the members' full segment vectors
-(``centres="members"``, the default, set by measurement: the same numbers rebuild each
-segment closer because the centre keeps what the f eigenvectors drop).
+Primitive centres are either the k-means centres in the f-D projection space (the paper
+and :class:`~visprim.model.PrimitiveModel`, ``centres="projection"``, the default) or the
+means of the members' full segment vectors (``centres="members"``, which keep what the f
+eigenvectors drop); on HDM05 (leave one actor out) both rebuild within 0.2° of each other at
+every k, so the default stays the model's own. A segment's posture is stored as each
+channel's mean (``posture="mean"``, 6 numbers per arm) or as the two unit bone directions
+of that mean (``posture="unit"``, 4 numbers, :func:`unit_posture`).
 ``max_stroke`` (seconds, default none) cuts every segment longer than that into equal parts,
 in training and held-out movements alike.
 
@@ -298,7 +301,7 @@ def fit_codebook(
     ks: Iterable[int],
     *,
     n_components: int = 30,
-    centres: str = "members",
+    centres: str = "projection",
     n_init: int = 3,
     seed: int = 0,
 ) -> Codebook:
@@ -700,7 +703,7 @@ def evaluate_rate(
     bench: Any,
     *,
     families: Sequence[str] = FAMILIES,
-    centres: str = "members",
+    centres: str = "projection",
     max_stroke: float | None = None,
     posture: str = "mean",
     model_params: dict[str, Any] | None = None,
@@ -749,7 +752,7 @@ def rate_benchmark(
     group_by: str | None = None,
     period: float = 0.034,
     families: Sequence[str] = FAMILIES,
-    centres: str = "members",
+    centres: str = "projection",
     max_stroke: float | None = None,
     posture: str = "mean",
     jobs: int | None = None,
@@ -926,6 +929,40 @@ class Description:
         }
 
 
+def _candidates(
+    model: Any, vectors: NDArray[np.float64], seconds: float
+) -> tuple[list[tuple[Description, float]], Callable[[Description], NDArray[np.float64]]]:
+    """Every description :func:`describe_segments` chooses from, with the squared error of
+    its rebuild, and the function that rebuilds the segments by one of them."""
+    from visprim.vectors import amplitude_gains
+
+    x = np.asarray(vectors, dtype=np.float64)
+    n_seg = x.shape[0]
+    f = int(model.n_components)
+    posture = int(model.n_channels) if model.offsets == "mean" else 0
+    p = model.transform(x)
+    labels, _ = model.assign(p)
+    centre = model.cluster_centers_[labels]
+
+    def rebuild(d: Description) -> NDArray[np.float64]:
+        if d.family == "projection":
+            return np.asarray(p @ model.components_.T + model.mean_)
+        coef = centre.copy()
+        coef[:, : d.m] = p[:, : d.m]
+        out = np.asarray(coef @ model.components_.T + model.mean_)
+        if d.family == "nearest+gain":
+            out = out * amplitude_gains(x, out)[:, None]
+        return out
+
+    options = [("nearest", 0)] + ([("nearest+gain", 0)] if model.offsets == "mean" else [])
+    options += [("residual", m) for m in range(1, f)] + [("projection", f)]
+    out = []
+    for fam, m in options:
+        d = Description(fam, m, movement_numbers(fam, n_seg, posture, m), float(seconds))
+        out.append((d, float(np.sum((x - rebuild(d)) ** 2))))
+    return out, rebuild
+
+
 def describe_segments(
     model: Any,
     vectors: NDArray[np.float64],
@@ -938,57 +975,59 @@ def describe_segments(
     :class:`~visprim.model.PrimitiveModel`, and the description used.
 
     Without ``budget``: ``family`` (default the model's own, the nearest primitive, scaled
-    by its gain if ``model.amplitude``). With ``budget`` (numbers per second of movement):
-    of the nearest primitive, with its gain, with m = 1 … f − 1 residual coefficients and
-    the own projection (m = f), the one whose rebuild lies closest to the segments among
-    those that fit the budget. Posture numbers are counted for posture-relative models
+    by its gain if ``model.amplitude``; or ``"projection"``). With ``budget`` (numbers per
+    second of movement): of the nearest primitive, with its gain, with m = 1 … f − 1
+    residual coefficients and the own projection (m = f), the one whose rebuild lies
+    closest to the segments (squared error of the segment vectors) among those that fit
+    the budget. Posture numbers are counted for posture-relative models
     (``offsets="mean"``); a model of absolute curves stores none.
     """
-    from visprim.vectors import amplitude_gains
-
-    x = np.asarray(vectors, dtype=np.float64)
-    n_seg = x.shape[0]
-    f = int(model.n_components)
-    posture = int(model.n_channels) if model.offsets == "mean" else 0
-    p = model.transform(x)
-    labels, _ = model.assign(p)
-    centre = model.cluster_centers_[labels]
-    default = "nearest+gain" if model.amplitude else "nearest"
-
-    def rebuild(fam: str, m: int) -> NDArray[np.float64]:
-        if fam == "projection":
-            return np.asarray(p @ model.components_.T + model.mean_)
-        coef = centre.copy()
-        coef[:, :m] = p[:, :m]
-        out = np.asarray(coef @ model.components_.T + model.mean_)
-        if fam == "nearest+gain":
-            out = out * amplitude_gains(x, out)[:, None]
-        return out
-
-    def describe(fam: str, m: int) -> Description:
-        return Description(fam, m, movement_numbers(fam, n_seg, posture, m), float(seconds))
-
+    candidates, rebuild = _candidates(model, vectors, seconds)
     if budget is None:
-        fam = family or default
-        m = f if fam == "projection" else 0
+        fam = family or ("nearest+gain" if model.amplitude else "nearest")
         if fam not in ("nearest", "nearest+gain", "projection"):
             raise ValueError(f"family must be nearest, nearest+gain or projection, got {fam!r}")
-        return rebuild(fam, m), describe(fam, m)
-    options = [("nearest", 0)] + ([("nearest+gain", 0)] if model.offsets == "mean" else [])
-    options += [("residual", m) for m in range(1, f)] + [("projection", f)]
-    fitting = [describe(fam, m) for fam, m in options]
-    fitting = [d for d in fitting if d.numbers_per_s <= budget]
+        d = next(d for d, _ in candidates if d.family == fam)
+        return rebuild(d), d
+    fitting = [(err, d.numbers, i) for i, (d, err) in enumerate(candidates)]
+    fitting = [c for c in fitting if candidates[c[2]][0].numbers_per_s <= budget * (1 + 1e-12)]
     if not fitting:
-        least = describe("nearest", 0).numbers_per_s
+        least = candidates[0][0]
         raise ValueError(
             f"budget {budget:g} numbers/s is below the smallest description of this movement "
-            f"({least:.1f} numbers/s: nearest primitive, {n_seg} segment(s) in {seconds:.2f} s)"
+            f"({least.numbers_per_s:.1f} numbers/s: nearest primitive, "
+            f"{vectors.shape[0]} segment(s) in {seconds:.2f} s)"
         )
-    best: tuple[float, int, Description, NDArray[np.float64]] | None = None
-    for d in fitting:
-        r = rebuild(d.family, d.m)
-        err = float(np.sum((x - r) ** 2))
-        if best is None or (err, d.numbers) < (best[0], best[1]):
-            best = (err, d.numbers, d, r)
-    assert best is not None
-    return best[3], best[2]
+    d = candidates[min(fitting)[2]][0]
+    return rebuild(d), d
+
+
+def share_budget(
+    model: Any,
+    parts: Sequence[tuple[NDArray[np.float64], float]],
+    span: float,
+    budget: float,
+) -> list[float]:
+    """Per-part budgets (numbers per second of each part) that share ``budget`` numbers per
+    second of a ``span``-second recording between its parts (its arms imitated one by one,
+    each ``(segment vectors, seconds)``): the combination of descriptions (one per part,
+    :func:`describe_segments`) with the least summed squared error whose numbers together
+    fit ``budget × span``."""
+    options = [_candidates(model, x, sec)[0] for x, sec in parts]
+    total = budget * span * (1 + 1e-12)
+    best: tuple[float, tuple[int, ...]] | None = None
+    # Two arms of at most f + 2 descriptions each: every combination is cheap to try.
+    for combo in np.ndindex(*(len(o) for o in options)):
+        numbers = sum(o[j][0].numbers for o, j in zip(options, combo, strict=True))
+        if numbers > total:
+            continue
+        err = sum(o[j][1] for o, j in zip(options, combo, strict=True))
+        if best is None or err < best[0]:
+            best = (err, tuple(combo))
+    if best is None:
+        least = sum(o[0][0].numbers for o in options) / span
+        raise ValueError(
+            f"budget {budget:g} numbers/s is below the smallest description of this movement "
+            f"({least:.1f} numbers/s: the nearest primitive for each of its {len(parts)} parts)"
+        )
+    return [o[j][0].numbers_per_s for o, j in zip(options, best[1], strict=True)]

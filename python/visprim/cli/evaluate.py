@@ -144,10 +144,10 @@ def register(sub: Any) -> None:
     p.add_argument("--rate-only", action="store_true", help="only the rate-distortion benchmark")
     p.add_argument(
         "--rate-centres",
-        choices=("members", "projection"),
-        default="members",
-        help="primitive centres of the rate benchmark: means of the members' segment vectors "
-        "(default) or k-means centres in the projection space (the paper)",
+        choices=("projection", "members"),
+        default="projection",
+        help="primitive centres of the rate benchmark: k-means centres in the projection "
+        "space (default, the paper's) or means of the members' segment vectors",
     )
     p.add_argument(
         "--max-stroke",
