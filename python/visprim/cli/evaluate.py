@@ -60,6 +60,7 @@ def _run_rate(args: argparse.Namespace, out: Any, also: Any) -> int:
             period=args.resample,
             centres=args.rate_centres,
             max_stroke=args.max_stroke,
+            posture=args.rate_posture,
             jobs=args.jobs,
         )
     except ValueError as exc:
@@ -148,6 +149,13 @@ def register(sub: Any) -> None:
         default="projection",
         help="primitive centres of the rate benchmark: k-means centres in the projection "
         "space (default, the paper's) or means of the members' segment vectors",
+    )
+    p.add_argument(
+        "--rate-posture",
+        choices=("mean", "unit"),
+        default="mean",
+        help="rate benchmark: store a segment's posture as its 6 channel means (default) or "
+        "as the 2 unit bone directions of that mean (4 numbers)",
     )
     p.add_argument(
         "--max-stroke",
