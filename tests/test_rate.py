@@ -12,6 +12,7 @@ from visprim.evaluate import Recording, make_benchmarks
 from visprim.features import from_angles
 from visprim.imitate import joint_space_errors
 from visprim.rate import (
+    best_within,
     bone_rms_deg,
     dct_rebuild,
     evaluate_rate,
@@ -219,3 +220,17 @@ def test_rate_benchmark_counts_and_report(tmp_path: Path) -> None:
         if r["family"] == "bridge":
             n_seg = (r["numbers"] - 5) // 6
             assert r["numbers"] == 1 + 2 * n_seg + 4 * (n_seg + 1)
+
+
+def test_best_within_a_rate() -> None:
+    rows = [
+        {"family": "nearest", "param": 30, "numbers_per_s": 8.0, "bone_deg_median": 12.0},
+        {"family": "residual", "param": 4, "numbers_per_s": 11.5, "bone_deg_median": 9.5},
+        {"family": "residual", "param": 6, "numbers_per_s": 13.0, "bone_deg_median": 8.0},
+        {"family": "dct-angles", "param": 12, "numbers_per_s": 12.0, "bone_deg_median": 7.0},
+        {"family": "keyframes-angles", "param": 12, "numbers_per_s": 12.1, "bone_deg_median": 9},
+    ]
+    assert best_within(rows, 12, "visprim")["param"] == 4
+    assert best_within(rows, 12, "dct")["bone_deg_median"] == 7.0
+    assert best_within(rows, 12, "keyframes") is None
+    assert best_within(rows, 7, "visprim") is None

@@ -799,19 +799,55 @@ def rate_benchmark(
 # ---------------------------------------------------------------------------- reports
 
 
+#: Rates (numbers per second) of the "best within" table of :func:`rate_markdown`.
+FRONTIER_RATES: tuple[float, ...] = (8, 10, 12, 16, 20)
+
+
+def best_within(
+    summary: Sequence[dict[str, Any]], rate: float, kinds: str
+) -> dict[str, Any] | None:
+    """The description of ``summary`` rows with the lowest median bone-direction error
+    among those of at most ``rate`` numbers per second: of the primitives (``kinds``
+    ``"visprim"``), the keyframes or the DCT baselines."""
+
+    def kind(fam: str) -> str:
+        return fam.split("-")[0] if fam.startswith(("keyframes", "dct")) else "visprim"
+
+    rows = [s for s in summary if kind(s["family"]) == kinds and s["numbers_per_s"] <= rate]
+    return min(rows, key=lambda s: s["bone_deg_median"]) if rows else None
+
+
 def rate_markdown(results: Sequence[RateResult]) -> str:
-    """The rate–distortion tables as markdown, one per benchmark, descriptions by rate."""
+    """The rate–distortion tables as markdown, one per benchmark: the best description of
+    each kind within a few rates, then every description by rate."""
     out = ["# Rate–distortion (held-out groups)", ""]
     for r in results:
         opts = ", ".join(f"{k}={v}" for k, v in r.options.items())
+        summary = r.summary()
         out += [
             f"## {r.benchmark} (leave one {r.group_by} out; {opts})",
+            "",
+            "| at most numbers / s | best primitive description | best keyframes | best DCT |",
+            "|---:|---|---|---|",
+        ]
+        for rate in FRONTIER_RATES:
+            cells = []
+            for kinds in ("visprim", "keyframes", "dct"):
+                b = best_within(summary, rate, kinds)
+                cells.append(
+                    "-"
+                    if b is None
+                    else f"{b['bone_deg_median']:.1f}° ({b['family']} {b['param']}, "
+                    f"{b['numbers_per_s']:.1f}/s)"
+                )
+            out.append(f"| {rate:g} | " + " | ".join(cells) + " |")
+        out += [
             "",
             "| description | parameter | numbers / s | bone-direction RMS median "
             "(group medians) | joint-space RMS median | movements |",
             "|---|---:|---:|---:|---:|---:|",
         ]
-        for s in sorted(r.summary(), key=lambda s: (s["family"], s["numbers_per_s"])):
+        for s in sorted(summary, key=lambda s: (s["family"], s["numbers_per_s"])):
             out.append(
                 f"| {s['family']} | {s['param']} | {s['numbers_per_s']:.1f} | "
                 f"{s['bone_deg_median']:.1f}° ({s['bone_deg_group_min']:.1f}–"
