@@ -886,12 +886,20 @@ def _plot(results: Sequence[RateResult], path: Path) -> None:
     fig, axes = plt.subplots(1, len(results), figsize=(7 * len(results), 5), squeeze=False)
     for ax, r in zip(axes[0], results, strict=True):
         summary = r.summary()
-        for fam in dict.fromkeys(s["family"] for s in summary):
+        colours = plt.get_cmap("tab20")(np.arange(20))
+        for i, fam in enumerate(dict.fromkeys(s["family"] for s in summary)):
             pts = sorted(
                 (s["numbers_per_s"], s["bone_deg_median"]) for s in summary if s["family"] == fam
             )
-            style = "--" if fam.startswith(("keyframes", "dct")) else "-"
-            ax.plot(*zip(*pts, strict=True), style, marker="o", ms=3, label=fam)
+            baseline = fam.startswith(("keyframes", "dct"))
+            ax.plot(
+                *zip(*pts, strict=True),
+                "--" if baseline else "-",
+                marker="s" if baseline else "o",
+                ms=3,
+                color=colours[(2 * i) % 20 + (2 * i) // 20],
+                label=fam,
+            )
         ax.set_xscale("log")
         ax.set_xlabel("numbers per second of movement")
         ax.set_ylabel("bone-direction RMS, degrees (median, held-out)")
