@@ -178,6 +178,7 @@ class Imitation:
             f"  headline: {head['compares']} bone-direction RMS {head['rms_deg']:.2f} deg; "
             f"holding the mean posture still: {head['still_posture_rms_deg']:.2f} deg "
             f"({100 * head['ratio_to_still']:.0f} % of it)",
+            _size_line(m.get("description")),
         ]
         lines += [f"  note: {n}" for n in head["notes"]]
         lines.append(
@@ -280,6 +281,18 @@ def headline(
 
 
 # ---------------------------------------------------------------------------- helpers
+
+
+def _size_line(d: dict[str, Any] | None) -> str:
+    """The size of the description, one line of :meth:`Imitation.summary`."""
+    if not d:
+        return "  description: -"
+    budget = d.get("budget_numbers_per_s")
+    return (
+        f"  description: {d['description']}, {d['numbers']} numbers in {d['seconds']:.2f} s = "
+        f"{d['numbers_per_s']:.1f} numbers/s"
+        + ("" if budget is None else f" (budget {budget:g} numbers/s)")
+    )
 
 
 def _rms_deg(x: NDArray[np.float64], axis: int | None = 0) -> Any:
@@ -457,9 +470,58 @@ class _Segmented:
     distances: NDArray[np.float64]
     rebuild: Rebuild
     method: str
+    #: The description used (:class:`visprim.rate.Description`).
+    description: Any = None
 
 
-def _segment_and_rebuild(model: Any, trial: Trial, source: Source, name: str) -> _Segmented:
+def _described(model: Any, sv: Any, source: Source, budget: float | None) -> tuple[Any, Any]:
+    """The segments rebuilt through the model's primitives (scaled by each segment's
+    amplitude if the model says so; with ``budget``, the best description within that many
+    numbers per second, :func:`visprim.rate.describe_segments`) or their projections, and
+    the description used."""
+    from visprim.rate import describe_segments
+
+    seconds = float(np.max(sv.ends) - np.min(sv.starts))
+    family = "projection" if source == "projection" else None
+    return describe_segments(model, sv.vectors, seconds, family=family, budget=budget)
+
+
+def _shares(model: Any, pieces: Sequence[Trial], budget: float | None) -> list[float | None]:
+    """Each piece's share of the ``budget`` (numbers per second of its own movement): the
+    budget itself for one piece, else the shares of the best combination of descriptions
+    (:func:`visprim.rate.share_budget`)."""
+    if budget is None or len(pieces) == 1:
+        return [budget] * len(pieces)
+    from visprim.rate import share_budget
+
+    parts = []
+    for t in pieces:
+        sv = model.vectorize(model.prepare([t]))
+        parts.append((sv.vectors, float(np.max(sv.ends) - np.min(sv.starts))))
+    span = max(sec for _, sec in parts)
+    return list(share_budget(model, parts, span, float(budget)))
+
+
+def _description_metrics(parts: Sequence[_Segmented], budget: float | None) -> dict[str, Any]:
+    """The size of the description (numbers per second of movement), per arm and in all."""
+    descs = [p.description for p in parts]
+    numbers = sum(d.numbers for d in descs)
+    seconds = max(d.seconds for d in descs)
+    out: dict[str, Any] = {
+        "budget_numbers_per_s": budget,
+        "numbers": numbers,
+        "seconds": seconds,
+        "numbers_per_s": numbers / seconds if seconds > 0 else float("inf"),
+        "description": "; ".join(dict.fromkeys(d.label for d in descs)),
+    }
+    if len(descs) > 1:
+        out["arms"] = {side: d.to_dict() for side, d in zip(ARM_SIDES, descs, strict=False)}
+    return out
+
+
+def _segment_and_rebuild(
+    model: Any, trial: Trial, source: Source, name: str, budget: float | None = None
+) -> _Segmented:
     corpus = model.prepare([trial])
     seg = corpus.segmentation
     if seg.n_segments == 0:
@@ -470,12 +532,7 @@ def _segment_and_rebuild(model: Any, trial: Trial, source: Source, name: str) ->
     sv = model.vectorize(corpus)
     projections = model.transform(sv.vectors)
     labels, distances = model.assign(projections)
-    if source == "primitives":  # scaled by each segment's amplitude if the model says so
-        from visprim.model import rebuild_from_centers
-
-        rebuilt = rebuild_from_centers(model, sv.vectors, model.cluster_centers_)
-    else:
-        rebuilt = projections @ model.components_.T + model.mean_
+    rebuilt, description = _described(model, sv, source, budget)
     # Curves in the model's description (angles or bone directions), on the trial's turns.
     curves = sv.to_trial_angles(rebuilt)
     bounds = np.stack([sv.starts, sv.ends], axis=1)
@@ -483,7 +540,14 @@ def _segment_and_rebuild(model: Any, trial: Trial, source: Source, name: str) ->
         JoinedTrajectory(list(curves), bounds), str(getattr(model, "features", "zyz"))
     )
     return _Segmented(
-        corpus.times_all, corpus.angles_all, bounds, labels, distances, rebuild, str(seg.method)
+        corpus.times_all,
+        corpus.angles_all,
+        bounds,
+        labels,
+        distances,
+        rebuild,
+        str(seg.method),
+        description,
     )
 
 
@@ -529,6 +593,7 @@ def imitate(
     dt: float | None = None,
     render_fps: float = 25.0,
     play: bool = True,
+    budget: float | None = None,
 ) -> Imitation:
     """Imitate one recording with a fitted model (see the module docstring).
 
@@ -547,6 +612,12 @@ def imitate(
         PD, which tracks within 0.04° there; 0.1 ms for the paper's explicit PD, which
         diverges at 1 ms). render_fps : rate of the stored frames, Hz.
     play : run the simulation (False: rebuild and its errors only).
+    budget : numbers per second of movement: rebuild through the best description that fits
+        (nearest primitive, with its gain, with residual coefficients, or the segment's own
+        projection; :func:`visprim.rate.describe_segments`); arms imitated one by one share
+        it as the best combination of their descriptions (:func:`visprim.rate.share_budget`).
+        ``metrics["description"]`` states the size of the description used, with or without
+        a budget.
 
     Raises
     ------
@@ -569,9 +640,12 @@ def imitate(
     # A one-arm model imitates each arm of a two-arm recording on its own (the left arm
     # mirrored into a right arm, :func:`visprim.trial.split_arms`).
     per_arm = trial.n_arms > len(arms)
+    if budget is not None and source != "primitives":
+        raise ValueError("budget picks the description through the primitives: leave source")
+    pieces = split_arms(trial) if per_arm else [trial]
+    shares = _shares(model, pieces, budget)
     parts = [
-        _segment_and_rebuild(model, t, source, name)
-        for t in (split_arms(trial) if per_arm else [trial])
+        _segment_and_rebuild(model, t, source, name, b) for t, b in zip(pieces, shares, strict=True)
     ]
     times = parts[0].times
     human = np.concatenate([p.human for p in parts], axis=1)
@@ -642,6 +716,7 @@ def imitate(
         "rebuild_vs_human_rms_deg": _angle_rms(rb_a[cov] - human[cov]),
         "rebuild_vs_human_joint_rms_deg": _joint_rms(*joint_space_errors(rb_a[cov], human[cov])),
         "rebuild_vs_human_direction_rms_deg": direction_rms_deg(rb_a[cov], human[cov]),
+        "description": _description_metrics(parts, budget),
     }
 
     playback = None

@@ -15,6 +15,8 @@ def run(args: argparse.Namespace) -> int:
     from visprim.evaluate import evaluate, to_markdown, write_report
 
     out = outputs.check_folder(args.out, force=args.force, inputs=args.data)
+    if args.rate_only:
+        return _run_rate(args, out, None)
     classes = [c.strip() for c in args.classes.split(",") if c.strip()] if args.classes else None
     try:
         results, notes = evaluate(
@@ -35,8 +37,39 @@ def run(args: argparse.Namespace) -> int:
         print("visprim evaluate: no benchmark to run; " + "; ".join(notes), file=sys.stderr)
         return 2
     print(to_markdown(results, notes), end="")
+    if args.rate:
+        return _run_rate(args, out, lambda tmp: write_report(results, notes, tmp))
     with outputs.atomic_folder(out, "evaluate") as tmp:
         paths = write_report(results, notes, tmp)
+    written = ", ".join(str(outputs.moved(p, tmp, out)) for p in paths.values())
+    print(f"\nwritten: {written}")
+    return 0
+
+
+def _run_rate(args: argparse.Namespace, out: Any, also: Any) -> int:
+    """The rate–distortion benchmark (:mod:`visprim.rate`), its table printed and its
+    files written beside what ``also(folder)`` writes."""
+    from visprim.cli import outputs
+    from visprim.rate import rate_benchmark, rate_markdown, write_rate_report
+
+    try:
+        results = rate_benchmark(
+            args.data,
+            labels=args.labels,
+            group_by=args.group,
+            period=args.resample,
+            centres=args.rate_centres,
+            max_stroke=args.max_stroke,
+            posture=args.rate_posture,
+            jobs=args.jobs,
+        )
+    except ValueError as exc:
+        print(f"visprim evaluate: {exc}", file=sys.stderr)
+        return 2
+    print(rate_markdown(results), end="")
+    with outputs.atomic_folder(out, "evaluate") as tmp:
+        paths = dict(also(tmp)) if also is not None else {}
+        paths.update(write_rate_report(results, tmp))
     written = ", ".join(str(outputs.moved(p, tmp, out)) for p in paths.values())
     print(f"\nwritten: {written}")
     return 0
@@ -107,6 +140,34 @@ def register(sub: Any) -> None:
         help=f"frame period in seconds (default {common.DEFAULT_RESAMPLE_S:g})",
     )
     p.add_argument("--jobs", type=int, default=None, help="reader processes (default: cores)")
+    p.add_argument(
+        "--rate",
+        action="store_true",
+        help="also measure the rate-distortion curve of held-out movements (numbers per "
+        "second of movement against rebuild error; rate.md, rate.csv, rate.png)",
+    )
+    p.add_argument("--rate-only", action="store_true", help="only the rate-distortion benchmark")
+    p.add_argument(
+        "--rate-centres",
+        choices=("projection", "members"),
+        default="projection",
+        help="primitive centres of the rate benchmark: k-means centres in the projection "
+        "space (default, the paper's) or means of the members' segment vectors",
+    )
+    p.add_argument(
+        "--rate-posture",
+        choices=("mean", "unit"),
+        default="mean",
+        help="rate benchmark: store a segment's posture as its 6 channel means (default) or "
+        "as the 2 unit bone directions of that mean (4 numbers)",
+    )
+    p.add_argument(
+        "--max-stroke",
+        type=float,
+        default=None,
+        metavar="S",
+        help="rate benchmark: cut segments longer than S seconds into equal parts",
+    )
     p.add_argument("--out", default="out/evaluate", help="report folder (default out/evaluate)")
     common.add_force_option(p)
     p.set_defaults(func=run)

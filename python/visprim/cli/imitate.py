@@ -65,6 +65,10 @@ def run(args: argparse.Namespace) -> int:
                 f"--video {video}: unsupported video format; name it .gif or .mp4 "
                 f"({', '.join(f'{e}: {w}' for e, w in VIDEO_FORMATS.items())})"
             ) from None
+    if args.budget is not None and (args.source != "primitives" or not args.budget > 0):
+        raise common.UsageError(
+            "--budget needs a positive number of numbers per second, and the default --source"
+        )
     out = outputs.check_folder(args.out, force=args.force, inputs=[args.model, args.recording])
 
     from visprim.imitate import imitate, write_imitation
@@ -74,7 +78,9 @@ def run(args: argparse.Namespace) -> int:
         model = common.load_model(args.model)
         trial = read_recording(args, args.recording, model)
         progress.step(f"segmenting, rebuilding, playing {trial.duration:.1f} s on Adonis")
-        result = imitate(model, trial, source=args.source, servo=args.servo, dt=args.dt)
+        result = imitate(
+            model, trial, source=args.source, servo=args.servo, dt=args.dt, budget=args.budget
+        )
         progress.step("writing files" + (" and the video" if video else ""))
         with outputs.atomic_folder(out, "imitate") as tmp:
             written = write_imitation(
@@ -113,6 +119,15 @@ def register(sub: Any) -> None:
         default="primitives",
         help="rebuild from the primitives (default) or, as a labelled near-copy, from each "
         "segment's own projection",
+    )
+    p.add_argument(
+        "--budget",
+        type=float,
+        default=None,
+        metavar="N",
+        help="rebuild through the best description within N numbers per second of movement "
+        "(nearest primitive, with its gain, with residual coefficients, or each segment's "
+        "projection); imitation.json says which one was used",
     )
     p.add_argument(
         "--servo",
