@@ -740,7 +740,7 @@ def write_imitation(
     * ``imitation.csv`` — the trajectories (:func:`imitation_csv`);
     * ``trajectory.json`` / ``trajectory.csv`` — the rebuild as URDF joint trajectory
       (:mod:`visprim.sim.export`);
-    * the video ``video`` (.gif or .mp4; None for none): human beside Adonis.
+    * the video ``video`` (a file name, .gif or .mp4; None for none): human beside Adonis.
 
     Nothing is written half-way: the video's format is checked first, every file is written
     into a hidden staging folder inside ``out_dir`` and moved into place (:func:`os.replace`)
@@ -756,6 +756,8 @@ def write_imitation(
     if video is not None:
         from visprim.sim.video import check_video_path
 
+        if Path(video).name != video or video in ("", ".", ".."):
+            raise ValueError(f"video must be a file name inside out_dir, got {video!r}")
         check_video_path(out / video)
     out.mkdir(parents=True, exist_ok=True)
     stage = Path(tempfile.mkdtemp(prefix=".imitation-", dir=out))

@@ -32,6 +32,11 @@ def run(args: argparse.Namespace) -> int:
             raise common.UsageError(f"{what} {path!r} not found")
     video = None if args.no_video else args.video
     if video is not None:
+        if Path(video).name != video or video in (".", ".."):
+            raise common.UsageError(
+                f"--video {video}: give a file name, written inside --out (such as "
+                f"{Path(video).name or 'imitation.gif'}), not a path"
+            )
         try:
             check_video_path(video)
         except ValueError:

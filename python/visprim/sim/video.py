@@ -99,6 +99,13 @@ def _mp4(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
     return n
 
 
+def _usual_mode(path: Path) -> None:
+    """Give ``path`` (made 0600 by :func:`tempfile.mkstemp`) the mode a new file gets."""
+    umask = os.umask(0o022)
+    os.umask(umask)
+    os.chmod(path, 0o666 & ~umask)
+
+
 def write_video(path: str | Path, frames: Iterable[Image.Image], fps: float) -> Path:
     """Write ``frames`` (RGB images of one size) at ``fps`` Hz to ``path`` (.gif or .mp4),
     atomically. Returns the path. Parent folders are created."""
@@ -114,6 +121,7 @@ def write_video(path: str | Path, frames: Iterable[Image.Image], fps: float) -> 
             _gif(tmp, frames, float(fps))
         else:
             _mp4(tmp, frames, float(fps))
+        _usual_mode(tmp)
         os.replace(tmp, out)
     except BaseException:
         tmp.unlink(missing_ok=True)
