@@ -695,11 +695,12 @@ def imitation_csv(imitation: Imitation) -> str:
     """One row per frame of the recording: time (s), segment and primitive (-1 where no
     segment covers it), the human's, the rebuild's and Adonis's angles (rad) and the
     rebuild's angular velocities (rad/s); empty where a value does not exist."""
-    import csv
     import io
 
+    from visprim.csvfile import writer
+
     buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
+    w = writer(buf)
     cols = ["time_s", "segment", "primitive"]
     for who in ("human", "rebuild", "adonis"):
         cols += [f"{who}_{a}_rad" for a in channel_names(imitation.human.shape[1])]
