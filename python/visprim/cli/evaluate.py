@@ -100,9 +100,14 @@ def register(sub: Any) -> None:
         "arms (default) or the classifier's two-arm primitives",
     )
     p.add_argument(
-        "--resample", type=float, default=0.034, help="frame period in seconds (default 0.034)"
+        "--resample",
+        type=common.period_s,
+        default=0.034,
+        help="frame period in seconds (default 0.034)",
     )
-    p.add_argument("--jobs", type=int, default=None, help="reader processes (default: cores)")
+    p.add_argument(
+        "--jobs", type=common.positive_int, default=None, help="reader processes (default: cores)"
+    )
     p.add_argument("--out", default="out/evaluate", help="report folder (default out/evaluate)")
     common.add_force_option(p)
     p.set_defaults(func=run)
