@@ -697,10 +697,16 @@ def imitation_csv(imitation: Imitation) -> str:
     rebuild's angular velocities (rad/s); empty where a value does not exist."""
     import io
 
+    buf = io.StringIO()
+    _write_imitation_rows(imitation, buf)
+    return buf.getvalue()
+
+
+def _write_imitation_rows(imitation: Imitation, fh: Any) -> None:
+    """Write :func:`imitation_csv`'s rows to the text file ``fh``, one at a time."""
     from visprim.csvfile import writer
 
-    buf = io.StringIO()
-    w = writer(buf)
+    w = writer(fh)
     cols = ["time_s", "segment", "primitive"]
     for who in ("human", "rebuild", "adonis"):
         cols += [f"{who}_{a}_rad" for a in channel_names(imitation.human.shape[1])]
@@ -724,7 +730,6 @@ def imitation_csv(imitation: Imitation) -> str:
             + fmt(adonis[i])
             + fmt(imitation.rebuild_velocities[i])
         )
-    return buf.getvalue()
 
 
 def write_imitation(
@@ -764,7 +769,8 @@ def write_imitation(
     stage = Path(tempfile.mkdtemp(prefix=".imitation-", dir=out))
     try:
         names: dict[str, str] = {"csv": "imitation.csv"}
-        (stage / names["csv"]).write_text(imitation_csv(imitation), encoding="utf-8")
+        with open(stage / names["csv"], "w", encoding="utf-8", newline="") as fh:
+            _write_imitation_rows(imitation, fh)
         js, cs = trajectory_of(imitation).write(stage / "trajectory")
         names["trajectory_json"], names["trajectory_csv"] = js.name, cs.name
         if video is not None and imitation.playback is not None:
