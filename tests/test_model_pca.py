@@ -86,3 +86,25 @@ def test_fewer_vectors_than_dimensions_match_the_covariance(n, d, keep):
     np.testing.assert_allclose(e.T @ e, np.eye(d), atol=1e-10)
     centred = x - x.mean(axis=0)
     np.testing.assert_allclose(centred @ e[:, n - 1 :], 0.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_pca_of_repeated_rows_with_a_decaying_spectrum(seed):
+    """Rows repeated forward and back (a recording looped to and fro) whose singular values
+    decay through rounding level: Cholesky-QR of the Gram vectors fails on such data."""
+    rng = np.random.default_rng(seed)
+    m, d = 60, 400
+    u = np.linalg.qr(rng.normal(size=(m, m)))[0]
+    v = np.linalg.qr(rng.normal(size=(d, m)))[0]
+    base = (u * 10.0 ** (-np.arange(m) / 3.0)) @ v.T
+    x = np.concatenate([base, base[::-1]] * 3)
+    basis = fit_pca(x, 10)
+    w = basis.eigenvectors
+    assert w.shape[0] == d and w.shape[1] >= 10
+    np.testing.assert_allclose(w.T @ w, np.eye(w.shape[1]), atol=1e-12)
+    xc = x - basis.mean
+    np.testing.assert_allclose(xc @ w @ w.T, xc, atol=1e-6)  # the span, to rounding level
+    values = basis.eigenvalues
+    assert np.all(np.diff(values) <= 1e-18) and values[-1] >= 0.0
+    expected = np.linalg.svd(xc, compute_uv=False) ** 2 / x.shape[0]
+    np.testing.assert_allclose(values[:10], expected[:10], rtol=1e-9)

@@ -26,8 +26,6 @@ approximation of it, averaged over the N training segments (units rad²).
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass, field
@@ -164,12 +162,12 @@ class ErrorTable:
 
     def to_csv(self) -> str:
         """CSV text: a header line of column names, one line per row (full precision)."""
-        buf = io.StringIO()
-        writer = csv.writer(buf, lineterminator="\n")
-        writer.writerow(self.columns)
-        for row in self.rows:
-            writer.writerow([repr(float(v)) if not _is_int(v) else str(int(v)) for v in row])
-        return buf.getvalue()
+        from visprim.csvfile import csv_text
+
+        return csv_text(
+            self.columns,
+            ([repr(float(v)) if not _is_int(v) else str(int(v)) for v in row] for row in self.rows),
+        )
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-friendly form (used by the model file)."""

@@ -303,7 +303,7 @@ class PrimitiveHistogramClassifier(ClassifierMixin, BaseEstimator):
                 f"features must be one of {', '.join(FEATURES)}, got {self.features!r}"
             )
         trials = list(trials)
-        labels = np.asarray(list(y))
+        labels = _labels_of(y, "trials")
         if len(trials) != labels.shape[0]:
             raise ValueError(f"fit: {len(trials)} trials but {labels.shape[0]} labels")
         if np.unique(labels).size < 2:
@@ -508,7 +508,7 @@ class _NearestSequences(ClassifierMixin, BaseEstimator):
     def _fit_common(self, movements: Sequence[Trial], y: Sequence[Any]) -> list[Trial]:
         self._check_common()
         trials = _trials_of(movements, "fit")
-        labels = np.asarray(list(y))
+        labels = _labels_of(y, "movements")
         if len(trials) != labels.shape[0]:
             raise ValueError(f"fit: {len(trials)} movements but {labels.shape[0]} labels")
         if np.unique(labels).size < 2:
@@ -593,6 +593,19 @@ class DTWClassifier(_NearestSequences):
 
     def _features(self, trials: list[Trial]) -> list[NDArray[np.float64]]:
         return [arm_directions(t) for t in trials]
+
+
+def _labels_of(y: Any, what: str) -> NDArray[Any]:
+    """The labels ``y`` of ``fit`` as a 1-D array; a ValueError naming the problem for
+    None, a scalar or a table."""
+    if y is None or isinstance(y, (str, bytes)) or not hasattr(y, "__iter__"):
+        raise ValueError(f"fit: y must be one label per training {what[:-1]}, got {y!r}")
+    labels = np.asarray(list(y))
+    if labels.ndim != 1:
+        raise ValueError(
+            f"fit: y must be one label per training {what[:-1]}, got shape {labels.shape}"
+        )
+    return labels
 
 
 def _windows(
@@ -778,8 +791,9 @@ class MotionClassifier(_NearestSequences):
             raise ValueError(
                 f"method must be one of {', '.join(MOTION_METHODS)}, got {self.method!r}"
             )
-        if not (isinstance(self.window, (int, float)) and self.window > 0):
-            raise ValueError(f"window must be a positive multiple, got {self.window!r}")
+        w = self.window
+        if not (isinstance(w, (int, float)) and not isinstance(w, bool) and 0 < w < np.inf):
+            raise ValueError(f"window must be a positive finite multiple, got {self.window!r}")
         if not (isinstance(self.step, (int, np.integer)) and self.step >= 1):
             raise ValueError(f"step must be a whole number of frames >= 1, got {self.step!r}")
         self.model_ = PrimitiveModel(**dict(self.model_params or {})).fit(trials)

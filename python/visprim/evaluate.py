@@ -54,7 +54,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from visprim import kernels
+from visprim import csvfile, kernels
 from visprim.accuracy import angular_error_deg
 from visprim.atomic import atomic_file, write_text
 from visprim.classify import MotionClassifier, arm_directions, dtw_matrix, group_folds
@@ -771,11 +771,11 @@ def write_report(
     rows = summary_rows(results)
     buf = io.StringIO()
     if rows:
-        w = csv.DictWriter(buf, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
+        w = csvfile.writer(buf)
+        w.writerow(list(rows[0]))
+        w.writerows([row.get(k, "") for k in rows[0]] for row in rows)
     pbuf = io.StringIO()
-    pw = csv.writer(pbuf)
+    pw = csvfile.writer(pbuf)
     pw.writerow(["benchmark", "file", "label", "group", "predicted", "dtw_baseline_predicted"])
     for r in results:
         for name, lab, grp, p, b in zip(

@@ -829,11 +829,18 @@ def imitation_csv(imitation: Imitation) -> str:
     """One row per frame of the recording: time (s), segment and primitive (-1 where no
     segment covers it), the human's, the rebuild's and Adonis's angles (rad) and the
     rebuild's angular velocities (rad/s); empty where a value does not exist."""
-    import csv
     import io
 
     buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
+    _write_imitation_rows(imitation, buf)
+    return buf.getvalue()
+
+
+def _write_imitation_rows(imitation: Imitation, fh: Any) -> None:
+    """Write :func:`imitation_csv`'s rows to the text file ``fh``, one at a time."""
+    from visprim.csvfile import writer
+
+    w = writer(fh)
     cols = ["time_s", "segment", "primitive"]
     for who in ("human", "rebuild", "adonis"):
         cols += [f"{who}_{a}_rad" for a in channel_names(imitation.human.shape[1])]
@@ -857,7 +864,6 @@ def imitation_csv(imitation: Imitation) -> str:
             + fmt(adonis[i])
             + fmt(imitation.rebuild_velocities[i])
         )
-    return buf.getvalue()
 
 
 def write_imitation(
@@ -874,7 +880,7 @@ def write_imitation(
     * ``imitation.csv`` — the trajectories (:func:`imitation_csv`);
     * ``trajectory.json`` / ``trajectory.csv`` — the rebuild as URDF joint trajectory
       (:mod:`visprim.sim.export`);
-    * the video ``video`` (.gif or .mp4; None for none): human beside Adonis.
+    * the video ``video`` (a file name, .gif or .mp4; None for none): human beside Adonis.
 
     Nothing is written half-way: the video's format is checked first, every file is written
     into a hidden staging folder inside ``out_dir`` and moved into place (:func:`os.replace`)
@@ -890,12 +896,15 @@ def write_imitation(
     if video is not None:
         from visprim.sim.video import check_video_path
 
+        if Path(video).name != video or video in ("", ".", ".."):
+            raise ValueError(f"video must be a file name inside out_dir, got {video!r}")
         check_video_path(out / video)
     out.mkdir(parents=True, exist_ok=True)
     stage = Path(tempfile.mkdtemp(prefix=".imitation-", dir=out))
     try:
         names: dict[str, str] = {"csv": "imitation.csv"}
-        (stage / names["csv"]).write_text(imitation_csv(imitation), encoding="utf-8")
+        with open(stage / names["csv"], "w", encoding="utf-8", newline="") as fh:
+            _write_imitation_rows(imitation, fh)
         js, cs = trajectory_of(imitation).write(stage / "trajectory")
         names["trajectory_json"], names["trajectory_csv"] = js.name, cs.name
         if video is not None and imitation.playback is not None:

@@ -162,9 +162,17 @@ def _gram_basis(x: NDArray[np.float64], n_keep: int) -> PCABasis:
     vecs = xc.T @ np.asarray(u)[:, :r]
     vecs /= np.linalg.norm(vecs, axis=0)  # = / √(N λ) up to rounding
     # Orthonormal up to rounding that grows as λ shrinks: two Cholesky-QR passes restore
-    # it to machine precision (cheaper than Householder QR for d ≫ r).
+    # it to machine precision (cheaper than Householder QR for d ≫ r). When the smallest
+    # kept eigenvalues sit just above rounding level (repeated rows: a recording looped
+    # back and forth), their vectors are nearly dependent and Cholesky fails: Householder
+    # QR then orthonormalises them and drops the directions that are only rounding.
     for _ in range(2):
-        chol = np.linalg.cholesky(vecs.T @ vecs)
+        try:
+            chol = np.linalg.cholesky(vecs.T @ vecs)
+        except np.linalg.LinAlgError:
+            vecs = _householder_basis(vecs)
+            r = vecs.shape[1]
+            break
         vecs = solve_triangular(chol, vecs.T, lower=True).T
     # The kernel's sign convention: each column's component of largest |value| positive.
     top = vecs[np.argmax(np.abs(vecs), axis=0), np.arange(r)]
@@ -173,6 +181,19 @@ def _gram_basis(x: NDArray[np.float64], n_keep: int) -> PCABasis:
     values[:r] = g_values[:r]
     vecs = _with_null_space(vecs, min(d, max(r, n_keep)))
     return PCABasis(mean=mean, eigenvalues=values, eigenvectors=vecs, n_vectors=int(n))
+
+
+def _householder_basis(vecs: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Orthonormal columns spanning the leading columns of ``vecs`` (d, r; unit columns,
+    in decreasing eigenvalue order) by Householder QR, cut before the first column whose
+    new direction is below √ε of its length (a direction made of rounding only)."""
+    q, rr = np.linalg.qr(vecs)
+    small = np.abs(np.diag(rr)) < np.sqrt(np.finfo(np.float64).eps)
+    keep = int(np.argmax(small)) if small.any() else vecs.shape[1]
+    q = q[:, :keep]
+    # Householder's signs are arbitrary: keep each column's direction that of ``vecs``.
+    q *= np.where(np.sum(q * vecs[:, :keep], axis=0) < 0, -1.0, 1.0)
+    return np.ascontiguousarray(q)
 
 
 def _with_null_space(vecs: NDArray[np.float64], m: int) -> NDArray[np.float64]:

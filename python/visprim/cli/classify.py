@@ -29,13 +29,16 @@ def run(args: argparse.Namespace) -> int:
         lines.append(f"{r.name}: sequence {list(r.sequence)}; histogram {top_s or '-'}")
     print("\n".join(lines))
     if out is not None:
-        with outputs.atomic_file(out) as tmp, tmp.open("w", encoding="utf-8") as fh:
-            fh.write("trial,segment,start_s,end_s,primitive,distance_rad\n")
+        from visprim.csvfile import writer
+
+        with outputs.atomic_file(out) as tmp, tmp.open("w", encoding="utf-8", newline="") as fh:
+            w = writer(fh)
+            w.writerow(["trial", "segment", "start_s", "end_s", "primitive", "distance_rad"])
             for r in results:
                 for j, ((s, e), lab, d) in enumerate(
                     zip(r.segments, r.primitives, r.distances, strict=True)
                 ):
-                    fh.write(f"{r.name},{j},{s:.6f},{e:.6f},{int(lab)},{d:.6g}\n")
+                    w.writerow([r.name, j, f"{s:.6f}", f"{e:.6f}", int(lab), f"{d:.6g}"])
         print(f"segment primitives written to {out}")
     if all(t.truth is not None for t in trials):
         print(f"against the true strokes: {score_against_truth(model, trials, results)}")

@@ -139,7 +139,9 @@ def register(sub: Any) -> None:
         metavar="SECONDS",
         help=f"frame period in seconds (default {common.DEFAULT_RESAMPLE_S:g})",
     )
-    p.add_argument("--jobs", type=int, default=None, help="reader processes (default: cores)")
+    p.add_argument(
+        "--jobs", type=common.positive_int, default=None, help="reader processes (default: cores)"
+    )
     p.add_argument(
         "--rate",
         action="store_true",

@@ -58,6 +58,11 @@ def run(args: argparse.Namespace) -> int:
             f"--size {args.size}: the video's panels must be at least {MIN_SIZE} pixels"
         )
     if video is not None:
+        if Path(video).name != video or video in (".", ".."):
+            raise common.UsageError(
+                f"--video {video}: give a file name, written inside --out (such as "
+                f"{Path(video).name or 'imitation.gif'}), not a path"
+            )
         try:
             check_video_path(video)
         except ValueError:

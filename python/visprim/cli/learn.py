@@ -16,12 +16,12 @@ log = logging.getLogger(__name__)
 
 
 def run(args: argparse.Namespace) -> int:
+    out = outputs.check_file(args.out, (".npz",), force=args.force, what="model file")
     if args.dask is not None or args.stream:
-        return _run_corpus(args)
+        return _run_corpus(args, out)
     from visprim.modelfile import save_model
     from visprim.progress import stages
 
-    out = outputs.check_file(args.out, (".npz",), force=args.force, what="model file")
     model = common.model_from_args(args)
     with stages(3, "learn") as st:
         st.step("reading data")
@@ -56,7 +56,7 @@ def _with_fix(message: str) -> str:
     return message
 
 
-def _run_corpus(args: argparse.Namespace) -> int:
+def _run_corpus(args: argparse.Namespace, out: Any) -> int:
     """Learn from a lazy corpus: streaming (``--stream``) or on Dask (``--dask``)."""
     from visprim.io.corpus import Corpus, GeneratedCorpus
     from visprim.modelfile import save_model
@@ -84,7 +84,7 @@ def _run_corpus(args: argparse.Namespace) -> int:
         raise common.CLIError(f"{exc}{hint}") from None
     except (ImportError, RuntimeError, OSError) as exc:
         raise common.CLIError(str(exc)) from None
-    path = save_model(model, args.out)
+    path = save_model(model, out)
     print(f"learned by {how} from {len(corpus)} items")
     print(common.summary(model, len(model.trial_names_)))
     print("(error tables need the training vectors: run learn without --dask/--stream)")

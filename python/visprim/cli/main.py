@@ -7,18 +7,22 @@ order ``--help`` shows them.
 Failures: :func:`main` is the one place that turns an exception into an exit status and one
 line on stderr naming the problem and the fix (``visprim COMMAND: error: ...``), with no
 traceback unless ``--debug``. Exit status 0 for success, 1 for errors, 2 for usage errors
-(argparse's and :class:`~visprim.cli.common.UsageError`), 130 for Ctrl-C.
+(argparse's and :class:`~visprim.cli.common.UsageError`), 130 for Ctrl-C, 143 for SIGTERM
+(both unwind as an error does: temporary files are removed, earlier outputs are left as
+they were).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
 import re
+import signal
 import sys
 import traceback
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import Any, NoReturn
 
 from visprim.cli.common import CLIError
@@ -188,12 +192,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_INTERRUPTED
     command = str(args.command)
     debug = bool(getattr(args, "debug", False))
-    with configured(int(args.verbose or 0), bool(getattr(args, "quiet", False))):
+    with configured(int(args.verbose or 0), bool(getattr(args, "quiet", False))), _on_sigterm():
         try:
             return int(args.func(args) or 0)
         except KeyboardInterrupt:
             message = "stopped by Ctrl-C; outputs left as before"
             return _fail(command, message, EXIT_INTERRUPTED, debug)
+        except _Terminated:
+            return _fail(command, "stopped by SIGTERM; outputs left as before", 143, debug)
         except BrokenPipeError:
             _silence_stdout()  # the reader of stdout went away (e.g. `| head`)
             return EXIT_ERROR
@@ -204,6 +210,31 @@ def main(argv: Sequence[str] | None = None) -> int:
         except Exception as exc:
             message, status = describe(exc)
             return _fail(command, message, status, debug)
+        finally:
+            from visprim.cli.outputs import release_claims
+
+            release_claims()
+
+
+class _Terminated(BaseException):
+    """SIGTERM, raised in the main thread so that ``finally`` clauses clean up (temporary
+    folders, half-written outputs, output locks) as they do for Ctrl-C."""
+
+
+@contextlib.contextmanager
+def _on_sigterm() -> Iterator[None]:
+    def handler(signum: int, frame: Any) -> None:
+        raise _Terminated
+
+    try:
+        previous = signal.signal(signal.SIGTERM, handler)
+    except ValueError:  # not the main thread (an embedding application): leave it alone
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

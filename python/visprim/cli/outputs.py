@@ -11,16 +11,27 @@
 
 A folder written by :func:`atomic_folder` holds a marker file :data:`MARKER`; ``--force``
 replaces only such folders (or empty ones), never a folder of other files.
+
+Concurrent runs: :func:`check_file` and :func:`check_folder` also claim the output for this
+process (:func:`claim`): a lock file created with ``O_EXCL`` in the temporary folder, named
+after the output's absolute path and holding the process id. A second run to the same
+output stops at once with an error naming the first run's process; the lock is released by
+:func:`release_claims` (the command line calls it when the command ends) or at exit, and a
+lock whose process is gone (a killed run) is taken over.
 """
 
 from __future__ import annotations
 
+import atexit
 import contextlib
+import hashlib
 import os
+import tempfile
+import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
-from visprim.atomic import atomic_file, remove_stale
+from visprim.atomic import pid_alive, atomic_file, remove_stale
 from visprim.atomic import atomic_folder as _atomic_folder
 from visprim.cli.common import UsageError
 
@@ -78,6 +89,7 @@ def check_file(
     _check_parent(p, option)
     if p.exists() and not force:
         raise UsageError(f"{option} {path} exists; pass --force to replace it")
+    claim(p, option)
     return p
 
 
@@ -115,7 +127,67 @@ def check_folder(
                     f"{option} {path} holds the input {item}, which replacing it would "
                     "delete; choose another --out"
                 )
+    claim(p, option)
     return p
+
+
+#: Lock files held by this process (path → the output they claim).
+_claims: dict[Path, Path] = {}
+
+
+def _lock_path(target: Path) -> Path:
+    key = os.path.realpath(os.path.abspath(target))
+    digest = hashlib.sha256(key.encode("utf-8", "surrogateescape")).hexdigest()[:24]
+    return Path(tempfile.gettempdir()) / f"visprim-out-{digest}.lock"
+
+
+def claim(target: str | os.PathLike[str], option: str = "--out") -> None:
+    """Claim the output ``target`` for this process (see the module docstring); a
+    :class:`UsageError` if another live visprim process holds it."""
+    lock = _lock_path(Path(target))
+    if lock in _claims:
+        return
+    for _ in range(3):
+        try:
+            fd = os.open(lock, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        except FileExistsError:
+            try:
+                text = lock.read_text(encoding="ascii").strip()
+                owner = int(text) if text else None
+            except (OSError, ValueError):
+                owner = None
+            if owner is None:  # being written this instant, or garbage
+                with contextlib.suppress(OSError):
+                    if time.time() - lock.stat().st_mtime < 10.0:
+                        owner = -1
+            if owner is not None and owner != os.getpid() and (owner == -1 or pid_alive(owner)):
+                who = "another run" if owner == -1 else f"another run (process {owner})"
+                raise UsageError(
+                    f"{option} {target} is being written by {who}; wait for it to finish "
+                    "or choose another output"
+                ) from None
+            with contextlib.suppress(OSError):
+                lock.unlink()  # the run that held it is gone
+            continue
+        except OSError:
+            return  # no usable temporary folder: no lock (the checks above still hold)
+        with os.fdopen(fd, "w", encoding="ascii") as fh:
+            fh.write(f"{os.getpid()}\n")
+        _claims[lock] = Path(target)
+        return
+    raise UsageError(f"{option} {target}: cannot take its lock file {lock}; try again")
+
+
+def release_claims() -> None:
+    """Release every output claimed by this process (:func:`claim`)."""
+    for lock in list(_claims):
+        with contextlib.suppress(OSError):
+            if lock.read_text(encoding="ascii").strip() == str(os.getpid()):
+                lock.unlink()
+        del _claims[lock]
+
+
+atexit.register(release_claims)
 
 
 @contextlib.contextmanager

@@ -475,7 +475,7 @@ def read_many(
             if on_error == "raise":
                 raise
             warnings.warn(f"skipped: {exc}", stacklevel=2)
-        except (ValueError, ArithmeticError, LookupError, TypeError) as exc:
+        except Exception as exc:
             # Data that got past a reader's checks (a reader bug): still one file's problem.
             err = ReadError(path, f"unexpected {type(exc).__name__}: {exc}")
             if on_error == "raise":
@@ -533,6 +533,22 @@ def _check_options(options: Mapping[str, Any]) -> None:
 
 
 def _read_arm(p: Path, fmt: str, arm: str, **kw: Any) -> list[ArmRecording]:
+    """The format's reader on ``p``; whatever goes wrong in it is a :class:`ReadError`
+    naming the file (the arguments were checked before)."""
+    try:
+        return _read_arm_of(p, fmt, arm, **kw)
+    except ReadError:
+        raise
+    except MemoryError:
+        raise MalformedFileError(p, "too large to read in the memory available") from None
+    except ValueError as exc:
+        raise MalformedFileError(p, _without_path(str(exc), p) or "unreadable") from exc
+    except Exception as exc:
+        reason = _without_path(str(exc), p) or "no details"
+        raise MalformedFileError(p, f"unreadable ({type(exc).__name__}: {reason})") from exc
+
+
+def _read_arm_of(p: Path, fmt: str, arm: str, **kw: Any) -> list[ArmRecording]:
     if fmt == "bvh":
         from visprim.io.bvh import read_bvh_arm
 

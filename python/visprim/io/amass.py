@@ -26,18 +26,27 @@ hand joints); the torso frame still comes from the rotations.
 AMASS's world frame is +Z up (override with ``up_axis``). ``shape.npz`` files (a subject's
 body shape without motion) are refused with a clear error; point visprim at the motion
 files (``**/*_poses.npz`` or ``**/*_stageii.npz``).
+
+Bounds, checked from the archive's member headers and each array's ``.npy`` header before
+any array is decompressed: at most :data:`MAX_FRAMES` frames, at most
+:data:`MAX_ARRAY_BYTES` uncompressed bytes per array, numeric arrays only, and a frame rate
+between 0.1 Hz and 100 kHz (the frame periods :mod:`visprim.io.assemble` accepts). Every
+failure — a damaged or encrypted archive, a bad header, an array of the wrong shape — is a
+:class:`~visprim.io.errors.ReadError` naming the file.
 """
 
 from __future__ import annotations
 
+import zipfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from visprim.io.assemble import ArmRecording, check_up_axis, up_rotation
+from visprim.io.assemble import ArmRecording, check_up_axis, period_problem, up_rotation
 from visprim.io.errors import MalformedFileError, ReadError
+from visprim.io.text import MAX_RECORDING_BYTES, check_file_size
 
 __all__ = ["JOINTS", "TEMPLATE_OFFSETS", "read_amass_arm", "rotations_from_axis_angle"]
 
@@ -73,6 +82,25 @@ TEMPLATE_OFFSETS: dict[str, tuple[float, float, float]] = {
     "knuckle": (-0.10, 0.0, 0.0),
 }
 
+#: Most frames a motion may have: 35 min at 120 Hz (AMASS's longest motions last minutes);
+#: reading one that long needs about 0.5 GB.
+MAX_FRAMES = 250_000
+#: Largest uncompressed array read from a motion file (bytes).
+MAX_ARRAY_BYTES = 400 << 20
+#: Arrays read, by name (the others in the archive are never decompressed).
+_USED = (
+    "poses",
+    "root_orient",
+    "pose_body",
+    "trans",
+    "joints",
+    "Jtr",
+    "mocap_framerate",
+    "mocap_frame_rate",
+    "header",
+    "eigenvectors",
+)
+
 #: Body frame (columns forward, left, up) in SMPL body axes: forward = +z, left = +x, up = +y.
 _BODY_AXES = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]])
 
@@ -99,6 +127,46 @@ def rotations_from_axis_angle(v: NDArray[np.float64]) -> NDArray[np.float64]:
     )
     eye = np.broadcast_to(np.eye(3), k.shape)
     return eye + a[..., None, None] * k + b[..., None, None] * (k @ k)
+
+
+def _declared(path: Path) -> dict[str, tuple[int, ...]]:
+    """Shapes of the used arrays of the archive ``path``, from its headers alone; a
+    :class:`MalformedFileError` for an encrypted, non-numeric, oversized or too-long one."""
+    shapes: dict[str, tuple[int, ...]] = {}
+    with zipfile.ZipFile(path) as zf:
+        for info in zf.infolist():
+            name = info.filename.removesuffix(".npy")
+            if name not in _USED:
+                continue
+            if info.flag_bits & 0x1:
+                raise MalformedFileError(path, f"the array {name!r} is encrypted")
+            if info.file_size > MAX_ARRAY_BYTES:
+                raise MalformedFileError(
+                    path,
+                    f"the array {name!r} holds {info.file_size / 2**20:.0f} MiB, more than "
+                    f"{MAX_ARRAY_BYTES / 2**20:.0f} MiB",
+                )
+            with zf.open(info) as fh:
+                version = np.lib.format.read_magic(fh)
+                if version == (1, 0):
+                    shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
+                else:
+                    shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
+            if dtype.hasobject or dtype.kind not in "biuf":
+                raise MalformedFileError(path, f"the array {name!r} is not numeric ({dtype})")
+            nbytes = int(np.prod(shape, dtype=object)) * dtype.itemsize
+            if nbytes > info.file_size:
+                raise MalformedFileError(
+                    path,
+                    f"the array {name!r} declares {shape} but the archive holds "
+                    f"{info.file_size} bytes of it",
+                )
+            if len(shape) >= 1 and name not in ("header", "eigenvectors") and shape[0] > MAX_FRAMES:
+                raise MalformedFileError(
+                    path, f"{name} has {shape[0]:,} frames, more than {MAX_FRAMES:,}"
+                )
+            shapes[name] = tuple(int(k) for k in shape)
+    return shapes
 
 
 def _scalar(npz: Any, keys: tuple[str, ...]) -> float | None:
@@ -169,11 +237,27 @@ def read_amass_arm(
         Not a readable ``.npz``, a shape-only file, missing frame rate, bad shapes, NaN.
     """
     p = Path(path)
+    if arm not in ("right", "left"):
+        raise ValueError(f"arm must be 'right' or 'left', got {arm!r}")
+    up = check_up_axis(up_axis) if up_axis is not None else "+z"
+    check_file_size(p, MAX_RECORDING_BYTES)
     try:
-        npz = np.load(p, allow_pickle=False)
-    except (OSError, ValueError, EOFError) as exc:
+        return _read(p, arm, up, up_axis is not None)
+    except ReadError:
+        raise
+    except MemoryError:
+        raise MalformedFileError(p, "too large to read in the memory available") from None
+    except (zipfile.BadZipFile, EOFError) as exc:
         raise MalformedFileError(p, f"not a readable .npz archive ({exc})") from None
-    with npz:
+    except Exception as exc:  # zlib.error, numpy's ValueError, an encrypted member ...
+        raise MalformedFileError(
+            p, f"not a readable AMASS motion ({type(exc).__name__}: {exc})"
+        ) from None
+
+
+def _read(p: Path, arm: str, up: str, up_given: bool) -> ArmRecording:
+    _declared(p)
+    with np.load(p, allow_pickle=False) as npz:
         if {"header", "eigenvectors"} <= set(npz.files):
             raise ReadError(p, "a visprim model file, not a recording")
         pose, layout = _pose(p, npz)
@@ -187,6 +271,9 @@ def read_amass_arm(
             raise MalformedFileError(
                 p, "no positive frame rate (mocap_framerate or mocap_frame_rate)"
             )
+        problem = period_problem(1.0 / rate)
+        if problem is not None:
+            raise MalformedFileError(p, f"frame rate {rate:g} Hz: a frame period of {problem}")
         trans = np.zeros((n, 3))
         if "trans" in npz.files:
             trans = np.asarray(npz["trans"], dtype=np.float64)
@@ -195,8 +282,6 @@ def read_amass_arm(
                     p, f"trans must be (T={n}, 3) finite metres, got {trans.shape}"
                 )
         positions = _joint_positions(p, npz, n)
-    if arm not in ("right", "left"):
-        raise ValueError(f"arm must be 'right' or 'left', got {arm!r}")
     joints, finger, body = _forward_kinematics(pose, trans, arm)
     if positions is not None:
         side = arm + "_"
@@ -204,7 +289,6 @@ def read_amass_arm(
         joints = np.concatenate([joints, positions[:, [JOINTS[side + "wrist"]]]], axis=1)
         if positions.shape[1] > _KNUCKLE_SMPLH[arm]:
             finger = positions[:, _KNUCKLE_SMPLH[arm]]
-    up = check_up_axis(up_axis) if up_axis is not None else "+z"
     rec = ArmRecording(
         times=np.arange(n, dtype=np.float64) / rate,
         joints=joints,
@@ -216,7 +300,7 @@ def read_amass_arm(
             "rate_hz": rate,
             "n_frames_file": n,
             "up_axis_in_file": up,
-            "up_axis_from": "argument" if up_axis is not None else "AMASS convention (+Z)",
+            "up_axis_from": "argument" if up_given else "AMASS convention (+Z)",
             "joints_from": "file joint positions" if positions is not None else "template",
             "body_frame_from": "rotation of spine3",
         },
@@ -230,23 +314,25 @@ def _forward_kinematics(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Shoulder, elbow, wrist (T, 3, 3), knuckle (T, 3) and torso frame (T, 3, 3) in the
     file's world frame, from the template skeleton."""
-    rot = rotations_from_axis_angle(pose)
+    used = [JOINTS[n] for n in ("pelvis", "spine1", "spine2", "spine3")]
+    used += [JOINTS[f"{arm}_{n}"] for n in ("collar", "shoulder", "elbow", "wrist")]
+    rot = dict(zip(used, rotations_from_axis_angle(pose[:, used]).swapaxes(0, 1), strict=True))
     sign = np.array([-1.0 if arm == "left" else 1.0, 1.0, 1.0])
 
     def offset(name: str, mirror: bool = False) -> NDArray[np.float64]:
         o = np.asarray(TEMPLATE_OFFSETS[name])
         return o * sign if mirror else o
 
-    glob = rot[:, JOINTS["pelvis"]]
+    glob = rot[JOINTS["pelvis"]]
     pos = trans.copy()
     for name in ("spine1", "spine2", "spine3"):
         pos = pos + glob @ offset(name)
-        glob = glob @ rot[:, JOINTS[name]]
+        glob = glob @ rot[JOINTS[name]]
     body = glob @ _BODY_AXES
     points = []
     for name in ("collar", "shoulder", "elbow", "wrist"):
         pos = pos + glob @ offset(name, True)
-        glob = glob @ rot[:, JOINTS[f"{arm}_{name}"]]
+        glob = glob @ rot[JOINTS[f"{arm}_{name}"]]
         points.append(pos)
     knuckle = pos + glob @ offset("knuckle", True)
     return np.stack(points[1:], axis=1), knuckle, body

@@ -53,7 +53,7 @@ from visprim.io.errors import (
 )
 from visprim.io.rotations import euler_matrix
 from visprim.io.skeleton import resolve_rig
-from visprim.io.text import file_stamp, read_text
+from visprim.io.text import MAX_SKELETON_BYTES, file_stamp, read_text
 
 _DOFS = ("rx", "ry", "rz", "tx", "ty", "tz", "l")
 DEFAULT_AMC_RATE = 120.0
@@ -112,8 +112,8 @@ class AsfSkeleton:
         return chain[::-1]
 
 
-def _read_lines(path: str) -> list[str]:
-    return read_text(path)[0].splitlines()
+def _read_lines(path: str, **bound: Any) -> list[str]:
+    return read_text(path, **bound)[0].splitlines()
 
 
 def _floats(path: str, line_no: int, tokens: Sequence[str], n: int, what: str) -> list[float]:
@@ -142,7 +142,7 @@ def parse_asf(path: str | os.PathLike[str]) -> AsfSkeleton:
         entry naming an undefined bone, a bone without a parent).
     """
     path = os.fspath(path)
-    lines = _read_lines(path)
+    lines = _read_lines(path, limit=MAX_SKELETON_BYTES, what="skeleton (.asf)")
     section = None
     name = ""
     length_unit = 1.0
@@ -376,7 +376,7 @@ def _parse_amc_regular(path: str, lines: list[str], dof_count: dict[str, int]) -
         numbers = np.fromiter(
             map(float, table[:, cols].ravel()), np.float64, count=table.shape[0] * cols.size
         )
-    except ValueError:
+    except (ValueError, OverflowError):  # the careful parser says what is wrong
         return None
     numbers = numbers.reshape(table.shape[0], cols.size)
     if np.any(np.diff(frames) != 1) or not np.all(np.isfinite(numbers)):
@@ -439,6 +439,9 @@ def parse_amc(path: str | os.PathLike[str], skeleton: AsfSkeleton) -> AmcMotion:
             continue
         toks = line.split()
         if len(toks) == 1 and re.fullmatch(r"[+-]?\d+", toks[0]):
+            if len(toks[0]) > 15:
+                too_large = f"line {n}: frame number {toks[0][:20]} is too large"
+                raise MalformedFileError(path, too_large)
             if frame_numbers:
                 close_frame(n)
                 if int(toks[0]) != frame_numbers[-1] + 1:

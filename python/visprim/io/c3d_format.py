@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from visprim.io.errors import MalformedFileError, ReadError, TruncatedFileError
+from visprim.io.text import MAX_RECORDING_BYTES, check_file_size
 
 BLOCK = 512
 C3D_KEY = 0x50
@@ -227,9 +228,10 @@ def read_c3d(path: str | os.PathLike[str]) -> C3DFile:
         Not a C3D file, or an inconsistent header or parameter section.
     """
     path = os.fspath(path)
+    size = check_file_size(path, MAX_RECORDING_BYTES)
     try:
         with open(path, "rb") as fh:
-            data = fh.read()
+            data = fh.read(size + 1)
     except OSError as exc:
         raise ReadError(path, f"cannot read: {exc.strerror or exc}") from None
     if not data:

@@ -26,7 +26,6 @@ velocities are their central differences over ±0.1 ms of the source trajectory.
 
 from __future__ import annotations
 
-import csv
 import io
 import json
 from dataclasses import dataclass
@@ -79,8 +78,10 @@ class JointTrajectory:
         return json.dumps(self.to_dict(), indent=1) + "\n"
 
     def to_csv(self) -> str:
+        from visprim.csvfile import writer
+
         buf = io.StringIO()
-        w = csv.writer(buf, lineterminator="\n")
+        w = writer(buf)
         w.writerow(
             ["time_from_start_s"]
             + [f"position:{n}" for n in self.joint_names]

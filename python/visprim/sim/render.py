@@ -323,6 +323,42 @@ class PlaybackDrawer:
             frames[0][still], [s for s, k in zip(playback.body_shapes, still, strict=True) if k]
         )
         self.moving_shapes = [playback.body_shapes[i] for i in self.moving]
+        # Over the bodies: the target path and via points (redrawn only when a via point is
+        # reached), then the path taken so far (drawn a segment at a time). Both are kept as
+        # transparent layers, so a frame costs the same at the end of a long playback as at
+        # its start.
+        self._marks: Image.Image | None = None
+        self._reached: NDArray[np.bool_] | None = None
+        self._path: Image.Image | None = None
+        self._path_end = 0
+
+    def _layer(self) -> Image.Image:
+        w, h = self.painter.size
+        return Image.new("RGBA", (w * SUPERSAMPLE, h * SUPERSAMPLE), (0, 0, 0, 0))
+
+    def _overlays(self, index: int, t: float) -> tuple[Image.Image, Image.Image]:
+        pb, p, s = self.playback, self.painter, SUPERSAMPLE
+        reached = np.nan_to_num(pb.via_reach_times, nan=np.inf) <= t + 1e-9
+        if self._marks is None or self._reached is None or np.any(reached != self._reached):
+            self._marks, self._reached = self._layer(), reached
+            draw = ImageDraw.Draw(self._marks)
+            for run in self.ref_runs:
+                draw.line(run, fill=(51, 89, 217), width=max(1, int(1.2 * s)))
+            r = 2.2 * s
+            for (x, y), hit in zip(self.via_2d, reached, strict=True):
+                draw.ellipse(
+                    (x - r, y - r, x + r, y + r),
+                    fill=(26, 166, 51) if hit else (255, 255, 255),
+                    outline=(26, 115, 38),
+                    width=max(1, s),
+                )
+        if self._path is None or index < self._path_end:
+            self._path, self._path_end = self._layer(), 0
+        if index > self._path_end:
+            piece = self.path_2d[self._path_end : index + 1]
+            p.polyline(ImageDraw.Draw(self._path), piece, (230, 102, 13), 1.6 * s)
+            self._path_end = index
+        return self._marks, self._path
 
     def draw(self, index: int, clock: float | None = None) -> Image.Image:
         """Frame ``index`` as an RGB image; ``clock`` (s) overrides the time shown."""
@@ -330,20 +366,9 @@ class PlaybackDrawer:
         image, draw = p.canvas()
         items = p.body_items(pb.frames[index][self.moving], self.moving_shapes)
         p.draw_items(draw, items + self.static_items)
-        s = SUPERSAMPLE
-        for run in self.ref_runs:
-            draw.line(run, fill=(51, 89, 217), width=max(1, int(1.2 * s)))
         t = pb.frame_times[index]
-        reached = np.nan_to_num(pb.via_reach_times, nan=np.inf) <= t + 1e-9
-        r = 2.2 * s
-        for (x, y), hit in zip(self.via_2d, reached, strict=True):
-            draw.ellipse(
-                (x - r, y - r, x + r, y + r),
-                fill=(26, 166, 51) if hit else (255, 255, 255),
-                outline=(26, 115, 38),
-                width=max(1, s),
-            )
-        p.polyline(draw, self.path_2d[: index + 1], (230, 102, 13), 1.6 * s)
+        for layer in self._overlays(index % pb.frames.shape[0], float(t)):
+            image.paste(layer, (0, 0), layer)
         out = p.finish(image)
         for label in self.labels:
             label.paste(out)

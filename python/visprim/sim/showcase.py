@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import csv
 import logging
 from collections.abc import Sequence
 from pathlib import Path
@@ -12,6 +11,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from visprim.csvfile import writer
 from visprim.sim.model import build_adonis
 from visprim.sim.playback import Playback, play
 from visprim.sim.render import render_gif
@@ -154,7 +154,7 @@ def write_metrics_csv(path: Path, playbacks: dict[int, Playback]) -> Path:
     """One row per primitive: tracking errors (degrees), times (seconds), via points."""
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w", newline="") as fh:
-        w = csv.writer(fh)
+        w = writer(fh)
         w.writerow(
             [
                 "primitive", "duration_s", "completion_s", "time_ratio", "rms_error_deg",

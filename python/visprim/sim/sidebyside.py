@@ -128,6 +128,14 @@ class SideBySide:
                 width=w,
             ),
         ]
+        # The dashed finger path never changes: drawn once into the background. The trail
+        # (the finger's path so far) grows: drawn onto ``_trail`` a segment at a time, so a
+        # frame costs the same at the end of a long recording as at its start.
+        draw = ImageDraw.Draw(self.background)
+        for run in self.finger_runs:
+            draw.line(run, fill=(150, 150, 210), width=SUPERSAMPLE)
+        self._trail = self.background.copy()
+        self._trail_end = 0  # trail drawn up to this frame
         self.start = float(imitation.rebuild.start - trial.times[0])
         end = max(self.human_times[-1], self.start + float(pb.frame_times[-1]))
         self.n_frames = int(np.floor(end * self.fps + 1e-9)) + 1
@@ -135,15 +143,20 @@ class SideBySide:
     def human_frame(self, tau: float) -> Image.Image:
         """The human panel at video time ``tau`` seconds."""
         p = self.painter
-        image = self.background.copy()
-        draw = ImageDraw.Draw(image)
         i = int(np.clip(np.searchsorted(self.human_times, tau, side="right") - 1, 0, None))
-        for run in self.finger_runs:
-            draw.line(run, fill=(150, 150, 210), width=SUPERSAMPLE)
         s = SUPERSAMPLE
+        if i < self._trail_end:  # earlier than the trail drawn so far: start it again
+            self._trail, self._trail_end = self.background.copy(), 0
+        if i > self._trail_end:
+            trail = ImageDraw.Draw(self._trail)
+            for a in range(self.n_arms):
+                piece = self.human_2d[self._trail_end : i + 1, 4 * a + 3]
+                p.polyline(trail, piece, (230, 102, 13), 1.6 * s)
+            self._trail_end = i
+        image = self._trail.copy()
+        draw = ImageDraw.Draw(image)
         r = 4.5 * s
         for a in range(self.n_arms):
-            p.polyline(draw, self.human_2d[: i + 1, 4 * a + 3], (230, 102, 13), 1.6 * s)
             pts = self.human_2d[i, 4 * a : 4 * a + 4]
             for u, v, col in zip(pts[:-1], pts[1:], _HUMAN_COLORS, strict=True):
                 draw.line((*u, *v), fill=col, width=int(7 * s))

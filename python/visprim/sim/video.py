@@ -1,8 +1,9 @@
 """Writing frames as a video file, the format from the extension, atomically.
 
-* ``.gif``: Pillow (core dependency), looping; frame delays are whole centiseconds. Frames
-  are reduced to one shared 255-colour palette (taken from the first frame, plus pure
-  white) without dithering, which keeps encoding fast and the colours stable.
+* ``.gif``: Pillow (core dependency) encodes each frame; the file is written one frame at a
+  time, so memory holds one frame whatever the length. Looping; frame delays are whole
+  centiseconds. Frames are reduced to one shared 255-colour palette (taken from the first
+  frame) without dithering, which keeps encoding fast and the colours stable.
 * ``.mp4``: H.264 through ``imageio-ffmpeg``, a wheel that ships its own ffmpeg binary
   (the optional extra ``pip install visprim[video]``); yuv420p, so width and height are
   rounded up to even numbers by padding.
@@ -14,6 +15,9 @@ under a temporary name in the target's folder and renamed over the target at the
 
 from __future__ import annotations
 
+import io
+import itertools
+import struct
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -47,24 +51,61 @@ def check_video_path(path: str | Path) -> Path:
     return out
 
 
+def _frame_blocks(im: Image.Image) -> bytes:
+    """The image blocks (descriptor with a local colour table, LZW data) of the palette
+    image ``im``, as Pillow encodes it for a one-frame GIF."""
+    buf = io.BytesIO()
+    im.save(buf, format="GIF", optimize=False)
+    b = buf.getvalue()
+    flags = b[10]
+    table = b""
+    pos = 13
+    if flags & 0x80:
+        size = 3 << ((flags & 7) + 1)
+        table, pos = b[13 : 13 + size], 13 + size
+    while b[pos] == 0x21:  # extensions: label, then sub-blocks up to an empty one
+        pos += 2
+        while b[pos]:
+            pos += b[pos] + 1
+        pos += 1
+    if b[pos] != 0x2C:
+        raise RuntimeError("Pillow wrote a GIF without an image descriptor")
+    descriptor = bytearray(b[pos : pos + 10])
+    pos += 10
+    if not descriptor[9] & 0x80:  # no local table: the global one becomes it
+        descriptor[9] = (descriptor[9] & 0x78) | 0x80 | (flags & 7)
+    else:
+        table = b""
+    end = pos + 1  # LZW minimum code size, then data sub-blocks up to an empty one
+    while b[end]:
+        end += b[end] + 1
+    return bytes(descriptor) + table + b[pos : end + 1]
+
+
 def _gif(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
+    """Write the GIF one frame at a time (memory: one frame), every frame reduced to the
+    first frame's palette."""
     it = iter(frames)
     first = next(it, None)
     if first is None:
         raise ValueError("write_video: no frames to write")
     palette = first.quantize(colors=255, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
-
-    def quantized() -> Iterable[Image.Image]:
-        yield palette
-        for im in it:
-            yield im.quantize(palette=palette, dither=Image.Dither.NONE)
-
-    images = list(quantized())
-    duration = max(10, int(round(1000.0 / fps / 10.0)) * 10)
-    images[0].save(
-        tmp, format="GIF", save_all=True, append_images=images[1:], duration=duration, loop=0
-    )
-    return len(images)
+    centis = max(1, int(round(1000.0 / fps / 10.0)))
+    w, h = first.size
+    n = 0
+    with open(tmp, "wb") as fh:
+        # Header, logical screen without a global table, loop forever (NETSCAPE2.0).
+        fh.write(b"GIF89a" + struct.pack("<HHBBB", w, h, 0, 0, 0))
+        fh.write(b"!\xff\x0bNETSCAPE2.0\x03\x01\x00\x00\x00")
+        for im in itertools.chain([palette], it):
+            frame = im if im is palette else im.quantize(palette=palette, dither=Image.Dither.NONE)
+            if frame.size != (w, h):
+                raise ValueError(f"write_video: frame {n} is {frame.size}, the first {(w, h)}")
+            fh.write(b"!\xf9\x04\x00" + struct.pack("<H", centis) + b"\x00\x00")
+            fh.write(_frame_blocks(frame))
+            n += 1
+        fh.write(b";")
+    return n
 
 
 def _mp4(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:

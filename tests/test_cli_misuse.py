@@ -1,0 +1,47 @@
+"""Misuse refused up front, in one line: bad option values, missing labels."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from visprim.classify import MotionClassifier
+from visprim.cli import main
+from visprim.datasets import imitation_experiment
+
+
+def run(argv: list[str]) -> int:
+    try:
+        return main(argv)
+    except SystemExit as exc:
+        return int(exc.code or 0)
+
+
+@pytest.mark.parametrize(
+    "option", [["--resample", "0"], ["--resample", "-1"], ["--resample", "nan"],
+               ["--resample", "1e9"], ["--jobs", "0"], ["--jobs", "-5"]],
+)  # fmt: skip
+def test_evaluate_checks_resample_and_jobs_first(option, tmp_path, capsys):
+    assert run(["evaluate", str(tmp_path), "--out", str(tmp_path / "r"), *option]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and option[0] in err[0], err
+
+
+@pytest.fixture(scope="module")
+def movements():
+    trials = imitation_experiment(2, 3, seed=1)
+    return trials, np.array([t.stimulus for t in trials])
+
+
+def test_motion_classifier_needs_labels(movements):
+    trials, _ = movements
+    with pytest.raises(ValueError, match="y must be one label per training movement"):
+        MotionClassifier().fit(trials, None)
+    with pytest.raises(ValueError, match="y must be one label per training"):
+        MotionClassifier(method="histogram").fit(trials, None)
+
+
+@pytest.mark.parametrize("window", [np.inf, np.nan, 0.0, -1.0])
+def test_motion_classifier_window_must_be_finite(movements, window):
+    trials, labels = movements
+    with pytest.raises(ValueError, match="window must be a positive finite multiple"):
+        MotionClassifier(window=window).fit(trials, labels)
