@@ -31,7 +31,7 @@ import time
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
-from visprim.atomic import pid_alive, atomic_file, remove_stale
+from visprim.atomic import atomic_file, pid_alive, remove_stale
 from visprim.atomic import atomic_folder as _atomic_folder
 from visprim.cli.common import UsageError
 
