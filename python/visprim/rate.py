@@ -54,8 +54,6 @@ per fold.
 
 from __future__ import annotations
 
-import csv
-import io
 import os
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
@@ -867,14 +865,16 @@ def rate_markdown(results: Sequence[RateResult]) -> str:
 
 
 def _csv(results: Sequence[RateResult]) -> str:
-    buf = io.StringIO()
+    from visprim.csvfile import csv_text
+
     rows = [s for r in results for s in r.summary()]
-    if rows:
-        w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
-        w.writeheader()
-        for s in rows:
-            w.writerow({k: round(v, 4) if isinstance(v, float) else v for k, v in s.items()})
-    return buf.getvalue()
+    if not rows:
+        return ""
+    header = list(rows[0])
+    cells = (
+        [round(v, 4) if isinstance(v, float) else v for v in (s[k] for k in header)] for s in rows
+    )
+    return csv_text(header, cells)
 
 
 def _plot(results: Sequence[RateResult], path: Path) -> None:
@@ -915,7 +915,7 @@ def _plot(results: Sequence[RateResult], path: Path) -> None:
 def write_rate_report(results: Sequence[RateResult], out_dir: str | os.PathLike[str]) -> dict:
     """Write ``rate.md``, ``rate.csv`` and ``rate.png`` into ``out_dir`` (each atomically).
     Returns the paths by kind."""
-    from visprim.evaluate import _write_atomic
+    from visprim.atomic import atomic_file, write_text
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
@@ -924,14 +924,10 @@ def write_rate_report(results: Sequence[RateResult], out_dir: str | os.PathLike[
         "rate_csv": out / "rate.csv",
         "rate_plot": out / "rate.png",
     }
-    _write_atomic(paths["rate_markdown"], rate_markdown(results))
-    _write_atomic(paths["rate_csv"], _csv(results))
-    tmp = out / ".rate.png.tmp.png"
-    try:
+    write_text(paths["rate_markdown"], rate_markdown(results), newline="")
+    write_text(paths["rate_csv"], _csv(results), newline="")
+    with atomic_file(paths["rate_plot"]) as tmp:
         _plot(results, tmp)
-        os.replace(tmp, paths["rate_plot"])
-    finally:
-        tmp.unlink(missing_ok=True)
     return paths
 
 
