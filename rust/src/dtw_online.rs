@@ -210,6 +210,7 @@ mod tests {
     }
 
     /// Open-end cost from a full table, for comparison.
+    #[allow(clippy::needless_range_loop)]
     fn open_end_by_table(a: &[f64], b: &[f64], dim: usize) -> (f64, usize) {
         let (n, m) = (a.len() / dim, b.len() / dim);
         let mut t = vec![vec![f64::INFINITY; m + 1]; n + 1];
