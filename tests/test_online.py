@@ -189,3 +189,21 @@ def test_memory_stays_flat_on_a_long_stream() -> None:
     traced = np.array([m for _, m in sizes])
     # Python allocations after the first minutes stay within 1 MB of where they were.
     assert traced[10:].max() - traced[10] < 1_000_000, traced[10:].max() - traced[10]
+
+
+def test_evaluate_online_writes_the_early_recognition_curve(
+    shared_data: Path, tmp_path: Path
+) -> None:
+    from visprim.cli.main import main
+
+    folder = shared_data / "bandai_namco_ds2"
+    if not folder.is_dir():
+        pytest.skip("bandai_namco_ds2 not in the shared data")
+    out = tmp_path / "ev"
+    assert main(["evaluate", str(folder), "--online", "--jobs", "1", "--out", str(out)]) == 0
+    data = json.loads((out / "early_recognition.json").read_text())
+    (result,) = data["results"]
+    assert result["fractions"][0] == 0.1 and result["fractions"][-1] == 1.0
+    assert all(0.0 <= a <= 1.0 for a in result["accuracy"])
+    # Well above chance (4 gestures) once the whole movement is seen.
+    assert result["closed_end_accuracy"] > 0.5
