@@ -25,6 +25,7 @@ mod lloyd;
 pub mod sqdist;
 
 pub mod dtw;
+pub mod dtw_online;
 
 pub use error::{Error, Result};
 

@@ -10,6 +10,10 @@ from visprim.cli import common
 
 
 def run(args: argparse.Namespace) -> int:
+    if getattr(args, "online", False):
+        from visprim.online.early import run_cli
+
+        return run_cli(args)
     from visprim.classify import MotionClassifier
     from visprim.cli import outputs
     from visprim.evaluate import evaluate, to_markdown, write_report
@@ -171,5 +175,11 @@ def register(sub: Any) -> None:
         help="rate benchmark: cut segments longer than S seconds into equal parts",
     )
     p.add_argument("--out", default="out/evaluate", help="report folder (default out/evaluate)")
+    p.add_argument(
+        "--online",
+        action="store_true",
+        help="early recognition instead: accuracy against the fraction of each movement seen "
+        "(open-end DTW, leave one group out; visprim.online.early)",
+    )
     common.add_force_option(p)
     p.set_defaults(func=run)

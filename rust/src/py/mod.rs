@@ -5,6 +5,7 @@ use pyo3::prelude::*;
 mod args;
 mod arrays;
 mod dtw;
+mod dtw_online;
 mod errors;
 mod linalg;
 mod signal;
@@ -16,6 +17,7 @@ fn _visprim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     signal::register(m)?;
     linalg::register(m)?;
     dtw::register(m)?;
+    dtw_online::register(m)?;
     Ok(())
 }
 

@@ -1,0 +1,153 @@
+"""The online answers beside the offline pipeline's, on whole recordings.
+
+For each recording, :func:`compare_trial` replays it through an
+:class:`~visprim.online.pipeline.OnlinePipeline` and runs the offline pipeline of the same
+model (:meth:`PrimitiveModel.prepare` with the fitted SEG-2 constant, the zero-phase
+filter, :meth:`~PrimitiveModel.assign`; the classifier's ``predict`` on the whole
+recording). :func:`summarise` pools the trials:
+
+* **boundaries**: one-to-one matching within ``tolerance`` (default ±100 ms,
+  :func:`visprim.segment.boundary_matches`), micro-averaged precision / recall / F1 with the
+  offline boundaries as the reference;
+* **primitives**: each offline segment paired with the online segment overlapping it most
+  (at least half of the longer of the two); the fraction of offline segments whose pair has
+  the same primitive (unpaired segments count as different);
+* **class**: the online final class (the last movement's :class:`MovementEnded`) against
+  ``predict``;
+* **latency**: stream time from each segment's end to its event (``emitted − end``), plus
+  the causal filter's group delay, which the stream time does not show.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from visprim.model import PrimitiveModel
+from visprim.online.events import MovementEnded, SegmentClosed
+from visprim.online.pipeline import OnlinePipeline
+from visprim.segment import boundary_matches, segment_boundaries
+from visprim.trial import Trial
+
+__all__ = ["TrialComparison", "compare_trial", "summarise"]
+
+
+@dataclass(frozen=True)
+class TrialComparison:
+    """One recording offline and online."""
+
+    name: str
+    offline_segments: NDArray[np.float64]  #: (n, 2) seconds
+    offline_primitives: NDArray[np.int64]
+    online_segments: NDArray[np.float64]  #: (m, 2) seconds
+    online_primitives: NDArray[np.int64]
+    latencies: NDArray[np.float64]  #: (m,) seconds of stream time
+    offline_class: str
+    online_class: str
+    boundaries: tuple[int, int, int]  #: matched, online, offline
+    primitives: tuple[int, int]  #: equal, offline segments
+
+
+def _pairs(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.int64]:
+    """For each segment of ``a``, the segment of ``b`` overlapping it most when the overlap
+    is at least half of the longer of the two, else -1."""
+    out = np.full(a.shape[0], -1, dtype=np.int64)
+    if b.shape[0] == 0:
+        return out
+    for i, (s, e) in enumerate(a):
+        ov = np.minimum(e, b[:, 1]) - np.maximum(s, b[:, 0])
+        j = int(np.argmax(ov))
+        longer = max(e - s, b[j, 1] - b[j, 0])
+        if ov[j] > 0 and ov[j] >= 0.5 * longer:
+            out[i] = j
+    return out
+
+
+def compare_trial(
+    model: PrimitiveModel,
+    trial: Trial,
+    classifier: Any = None,
+    *,
+    chunk: int = 1,
+    tolerance: float = 0.1,
+    **options: Any,
+) -> TrialComparison:
+    """Replay ``trial`` online (``chunk`` frames per push, ``options`` for the
+    segmenter) and run the offline pipeline on it (module docstring)."""
+    corpus = model.prepare([trial], tune_seg2=False)
+    off_seg = corpus.segments[0]
+    if corpus.segmentation.n_segments:
+        off_prim, _ = model.assign(model.transform(model.vectorize(corpus).vectors))
+    else:
+        off_prim = np.zeros(0, dtype=np.int64)
+    off_class = "" if classifier is None else str(classifier.predict([trial])[0])
+    pipe = OnlinePipeline(model, classifier, **options)
+    segs: list[SegmentClosed] = []
+    ends: list[MovementEnded] = []
+    for ev in pipe.replay(trial, chunk=chunk):
+        if isinstance(ev, SegmentClosed):
+            segs.append(ev)
+        elif isinstance(ev, MovementEnded):
+            ends.append(ev)
+    on_seg = np.array([[s.start, s.end] for s in segs]).reshape(-1, 2)
+    on_prim = np.array([s.primitive for s in segs], dtype=np.int64)
+    lat = np.array([s.latency for s in segs])
+    if off_seg.shape[0] and on_seg.shape[0]:
+        matched, n_on, n_off = boundary_matches(
+            segment_boundaries(on_seg), segment_boundaries(off_seg), tolerance
+        )
+    else:
+        n_on = segment_boundaries(on_seg).size if on_seg.shape[0] else 0
+        n_off = segment_boundaries(off_seg).size if off_seg.shape[0] else 0
+        matched = 0
+    pair = _pairs(off_seg, on_seg)
+    equal = (
+        int(np.sum((pair >= 0) & (on_prim[np.maximum(pair, 0)] == off_prim))) if pair.size else 0
+    )
+    return TrialComparison(
+        name=trial.name or (trial.source or ""),
+        offline_segments=off_seg,
+        offline_primitives=np.asarray(off_prim, dtype=np.int64),
+        online_segments=on_seg,
+        online_primitives=on_prim,
+        latencies=lat,
+        offline_class=off_class,
+        online_class=ends[-1].label if ends else "",
+        boundaries=(int(matched), int(n_on), int(n_off)),
+        primitives=(equal, int(off_seg.shape[0])),
+    )
+
+
+def summarise(results: Sequence[TrialComparison], delay: float = 0.0) -> dict[str, float]:
+    """Pooled figures (module docstring); ``delay`` (s) is added to every latency (the
+    causal filter's group delay)."""
+    m = sum(r.boundaries[0] for r in results)
+    n_on = sum(r.boundaries[1] for r in results)
+    n_off = sum(r.boundaries[2] for r in results)
+    p = m / n_on if n_on else 1.0
+    rc = m / n_off if n_off else 1.0
+    f1 = 2 * p * rc / (p + rc) if p + rc > 0 else 0.0
+    eq = sum(r.primitives[0] for r in results)
+    n_seg = sum(r.primitives[1] for r in results)
+    lat = np.concatenate([r.latencies for r in results]) + delay if results else np.zeros(0)
+    classed = [r for r in results if r.offline_class]
+    return {
+        "trials": float(len(results)),
+        "boundary_precision": p,
+        "boundary_recall": rc,
+        "boundary_f1": f1,
+        "primitive_equal": eq / n_seg if n_seg else float("nan"),
+        "offline_segments": float(n_seg),
+        "online_segments": float(sum(r.online_segments.shape[0] for r in results)),
+        "class_equal": (
+            float(np.mean([r.online_class == r.offline_class for r in classed]))
+            if classed
+            else float("nan")
+        ),
+        "latency_median": float(np.median(lat)) if lat.size else float("nan"),
+        "latency_p95": float(np.quantile(lat, 0.95)) if lat.size else float("nan"),
+    }

@@ -1,0 +1,572 @@
+"""Online SEG-2: the segments of a stream, each closed as soon as its end is known.
+
+Stages, each causal, frame by frame (chunks of any size give the same segments):
+
+1. **Inverse kinematics** of each pushed frame (:func:`visprim.ik.arm_angles_corpus`). For
+   bone-direction models γ and α come from ``atan2`` on every frame (directions are exact
+   for any γ, and offline's interpolation through the singular cones needs later frames),
+   so the segments do not depend on how the stream is cut into chunks. Z-Y-Z models keep
+   the interpolation within each chunk and the angles continuous across chunks by whole
+   turns (their segments may depend on the chunking near the singular cones).
+2. **Causal low-pass** (:mod:`visprim.online.lowpass`) of the angles, Butterworth of
+   ``filter_order`` (default 2) at the model's normalised ``cutoff``. The model's own order
+   (10, zero phase offline) would delay every event by 7.7 frames (262 ms at 34 ms frames);
+   order 2 delays by 1.7 frames (58 ms). ``filter_order=None`` uses the model's order.
+3. The model's per-frame channels (:func:`visprim.features.from_angles`) and
+   ``z = Σ θ̇ᵢ²`` with numpy's gradient, central differences from the timestamps: the
+   velocity of frame ``k`` needs frame ``k + 1`` (**one frame of look-ahead**).
+4. **SEG-2 with the fitted constant** ``c = seg2_threshold_`` and the model's rules
+   (:mod:`visprim.segment.seg2`): runs of ``z ≥ c`` that travel more than
+   ``min_travel_deg``; a boundary between two such runs at the smallest ``z`` of the rest
+   between them, known when the second run becomes significant (its travel passes
+   ``min_travel_deg``); the movement's onset and offset where the arm is at rest
+   (``z ≤ c / 25``, the robust tuning's rule; the local minima of ``z`` for models tuned
+   by repetitions). ``threshold="adaptive"`` lowers ``c`` for slow movers as the robust
+   tuning does per trial, from the 95th percentile of ``z`` over the last
+   ``speed_window`` seconds instead of the whole trial.
+5. A movement **ends** when no significant run has begun ``rest_timeout`` seconds after the
+   last one ended and its offset has been found (or when the stream ends): its last
+   segment is closed at the offset.
+
+Each closed segment is resampled like a training segment
+(:func:`visprim.vectors.vectors_from_frames`), projected and assigned its nearest primitive
+(:meth:`~visprim.model.PrimitiveModel.assign`).
+
+Latency (stream time from a segment's last frame to its event): the low-pass' group delay
++ one frame (velocity) + the time the next run needs to become significant (inner
+boundaries) or ``rest_timeout`` (a movement's last segment). Memory: ring buffers of
+``max_segment`` seconds of frames (a longer segment is cut there, ``forced=True``) and of
+``speed_window`` seconds of ``z``, allocated once.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from visprim.features import from_angles, periodic_channels
+from visprim.ik import DEFAULT_SINGULAR_ANGLE, arm_angles_corpus
+from visprim.model import PrimitiveModel
+from visprim.online.events import MovementEnded, SegmentClosed
+from visprim.online.lowpass import CausalLowpass
+from visprim.online.ring import FrameRing
+from visprim.segment.seg2 import (
+    _STILL,
+    DEFAULT_MIN_TRAVEL_DEG,
+    ROBUST_FRACTION,
+    ROBUST_REST,
+    ROBUST_SLOWEST,
+)
+from visprim.trial import Trial
+from visprim.vectors import amplitude_gains, vectors_from_frames
+
+__all__ = ["Frames", "OnlineSegmenter", "frames_of"]
+
+#: Frames processed per step of the state machine (a longer chunk is split).
+_BLOCK = 256
+#: Adaptive threshold: recomputed every this many frames.
+_EVERY = 8
+
+
+@dataclass(frozen=True)
+class Frames:
+    """A chunk of a stream: times (k,) seconds, markers (k, 4 n_arms, 3) metres, optional
+    joints (k, 3 n_arms, 3) and body_frame (k, 3, 3) (as in :class:`~visprim.trial.Trial`)."""
+
+    times: NDArray[np.float64]
+    markers: NDArray[np.float64]
+    joints: NDArray[np.float64] | None = None
+    body_frame: NDArray[np.float64] | None = None
+
+    def __len__(self) -> int:
+        return int(self.times.shape[0])
+
+    def part(self, a: int, b: int) -> Frames:
+        return Frames(
+            self.times[a:b],
+            self.markers[a:b],
+            None if self.joints is None else self.joints[a:b],
+            None if self.body_frame is None else self.body_frame[a:b],
+        )
+
+    def as_trial(self, arms: tuple[str, ...]) -> Trial:
+        """The chunk as a Trial (a one-frame chunk is doubled, 1 µs later, and the copy
+        dropped by the caller)."""
+        if len(self) == 1:
+            dup = Frames(
+                np.array([self.times[0], self.times[0] + 1e-6]),
+                np.repeat(self.markers, 2, axis=0),
+                None if self.joints is None else np.repeat(self.joints, 2, axis=0),
+                None if self.body_frame is None else np.repeat(self.body_frame, 2, axis=0),
+            )
+            return dup.as_trial(arms)
+        return Trial(
+            times=self.times,
+            markers=self.markers,
+            joints=self.joints,
+            body_frame=self.body_frame,
+            arms=arms,
+            name="stream",
+        )
+
+
+def frames_of(
+    chunk: Trial | Frames | None = None,
+    *,
+    times: Any = None,
+    markers: Any = None,
+    joints: Any = None,
+    body_frame: Any = None,
+) -> Frames:
+    """A :class:`Frames` chunk from a Trial, a Frames, or arrays (checked)."""
+    if isinstance(chunk, Frames):
+        return chunk
+    if isinstance(chunk, Trial):
+        return Frames(chunk.times, chunk.markers, chunk.joints, chunk.body_frame)
+    if chunk is not None:
+        raise TypeError(f"expected a Trial or Frames chunk, got {type(chunk).__name__}")
+    t = np.atleast_1d(np.asarray(times, dtype=np.float64))
+    m = np.asarray(markers, dtype=np.float64)
+    if t.ndim != 1 or m.ndim != 3 or m.shape[0] != t.shape[0] or m.shape[2] != 3:
+        raise ValueError(
+            f"need times (k,) and markers (k, 4 n_arms, 3) of equal k, got {t.shape} and {m.shape}"
+        )
+    j = None if joints is None else np.asarray(joints, dtype=np.float64)
+    f = None if body_frame is None else np.asarray(body_frame, dtype=np.float64)
+    return Frames(t, m, j, f)
+
+
+class OnlineSegmenter:
+    """SEG-2 segments and their primitives, from frames pushed in chunks (module docstring).
+
+    Parameters
+    ----------
+    model : fitted PrimitiveModel with a SEG-2 constant (``seg2_threshold_``).
+    filter_order : int or None
+        Order of the causal low-pass (default 2; None: the model's ``filter_order``).
+    threshold : {"fixed", "adaptive"}
+        ``c`` lowered for slow movers as the offline robust tuning does (default), or
+        ``c`` as fitted (module docstring).
+    rest_timeout : float, seconds
+        Rest after a movement's last run that ends the movement (default 1.0).
+    max_segment : float, seconds
+        Longest segment held (default 10 s; longer ones are cut, ``forced=True``).
+    speed_window : float, seconds
+        Window of the adaptive threshold's 95th percentile of ``z`` (default 10 s).
+    min_travel_deg : float, degrees
+        Travel that makes a run of ``z ≥ c`` a movement (SEG-2's, default 5°).
+    """
+
+    def __init__(
+        self,
+        model: PrimitiveModel,
+        *,
+        filter_order: int | None = 2,
+        threshold: str = "adaptive",
+        rest_timeout: float = 1.0,
+        max_segment: float = 10.0,
+        speed_window: float = 10.0,
+        min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
+    ) -> None:
+        model._check_fitted()
+        c = getattr(model, "seg2_threshold_", None)
+        if c is None or not (c > 0):
+            raise ValueError("the model has no fitted SEG-2 constant (seg2_threshold_)")
+        if threshold not in ("fixed", "adaptive"):
+            raise ValueError(f"threshold must be 'fixed' or 'adaptive', got {threshold!r}")
+        for name, v in (("rest_timeout", rest_timeout), ("max_segment", max_segment)):
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"{name} must be a positive number of seconds, got {v!r}")
+        if not (math.isfinite(speed_window) and speed_window > 0):
+            raise ValueError(
+                f"speed_window must be a positive number of seconds, got {speed_window!r}"
+            )
+        self.model = model
+        self.arms = tuple(getattr(model, "arms_", ("right",)))
+        self.features = str(model.features)
+        self.c = float(c)
+        self.threshold = threshold
+        self.robust = str(model.seg2_tuning) == "robust"
+        self.rest_timeout = float(rest_timeout)
+        self.max_segment = float(max_segment)
+        self.speed_window = float(speed_window)
+        self.min_travel = float(np.deg2rad(min_travel_deg))
+        order = int(model.filter_order) if filter_order is None else int(filter_order)
+        self.lowpass = CausalLowpass(order, float(model.cutoff))
+        #: Frames by which the filtered angles lag the movement (the filter's group delay,
+        #: rounded): segment times are reported that many frames earlier.
+        self._shift = int(round(self.lowpass.delay_frames))
+        self._periodic = periodic_channels("zyz", len(self.arms))
+        self._vector_periodic = periodic_channels(self.features, len(self.arms))
+        self._n_channels = int(model.n_channels)
+        self._ring: FrameRing | None = None
+        self._times: FrameRing | None = None
+        self._z: FrameRing | None = None
+        self._last_angles: NDArray[np.float64] | None = None
+        self._reset_state()
+
+    # ------------------------------------------------------------------ state
+
+    def _reset_state(self) -> None:
+        self.n_frames = 0  #: frames received
+        self._next = 0  #: next frame whose z is to be processed
+        self._prev_speed = 0.0
+        self._prev_t = float("nan")
+        self._prev_z = float("nan")
+        self._ck = self.c
+        # runs
+        self._in_run = False
+        self._run_start = -1
+        self._run_travel = 0.0
+        self._run_sig = False
+        self._run_min = (math.inf, -1)
+        # movement
+        self.movement = -1
+        self._open = False
+        self._boundary = -1
+        self._n_seg = 0
+        self._gap_min = (math.inf, -1)
+        self._offset = -1
+        self._last_run_end_t = float("nan")
+        self._last_stop = 0
+        self._movement_start = float("nan")
+        self.decided: list[int] = []
+        self._final = False
+
+    def _allocate(self, period: float) -> None:
+        n = max(8, int(math.ceil(self.max_segment / period)) + 4)
+        self._ring = FrameRing(n + _BLOCK + 4, self._n_channels)
+        self._times = FrameRing(n + _BLOCK + 4, 1)
+        w = max(8, int(math.ceil(self.speed_window / period)))
+        self._z = FrameRing(w + _BLOCK + 4, 1)
+        self._max_frames = n
+        self._window_frames = w
+
+    @property
+    def buffer_bytes(self) -> int:
+        """Bytes held by the ring buffers (fixed once the first chunk set them up)."""
+        return sum(r.nbytes for r in (self._ring, self._times, self._z) if r is not None)
+
+    # ------------------------------------------------------------------ input
+
+    def values_of(self, frames: Frames) -> NDArray[np.float64]:
+        """The model's per-frame channels of a chunk, causally low-passed (stages 1–3)."""
+        single = len(frames) == 1
+        # Bone directions are exact for any γ, so the causal IK takes γ and α from atan2
+        # on every frame (no interpolation through the singular cones, which needs later
+        # frames); Z-Y-Z models keep the interpolation within each chunk.
+        singular = 0.0 if self.features == "directions" else DEFAULT_SINGULAR_ANGLE
+        angles = arm_angles_corpus([frames.as_trial(self.arms)], singular_angle=singular)[0]
+        if single:
+            angles = angles[:1]
+        angles = np.array(angles, dtype=np.float64)
+        if self._last_angles is not None and self._periodic:
+            p = list(self._periodic)
+            turns = np.round((self._last_angles[p] - angles[0, p]) / (2 * np.pi))
+            angles[:, p] += 2 * np.pi * turns
+        self._last_angles = angles[-1].copy()
+        return from_angles(self.lowpass(angles), self.features)
+
+    def push(self, frames: Frames) -> list[SegmentClosed | MovementEnded]:
+        """Add a chunk; returns the segments closed and movements ended, in order."""
+        out: list[SegmentClosed | MovementEnded] = []
+        for a in range(0, len(frames), _BLOCK):
+            part = frames.part(a, min(len(frames), a + _BLOCK))
+            out.extend(self._push_block(self.values_of(part), part.times))
+        return out
+
+    def push_values(
+        self, values: NDArray[np.float64], times: NDArray[np.float64]
+    ) -> list[SegmentClosed | MovementEnded]:
+        """Add already filtered per-frame channels ``(k, C)`` with their times ``(k,)``."""
+        out: list[SegmentClosed | MovementEnded] = []
+        for a in range(0, times.shape[0], _BLOCK):
+            b = min(times.shape[0], a + _BLOCK)
+            out.extend(self._push_block(values[a:b], times[a:b]))
+        return out
+
+    def _push_block(
+        self, values: NDArray[np.float64], times: NDArray[np.float64]
+    ) -> list[SegmentClosed | MovementEnded]:
+        k = times.shape[0]
+        if k == 0:
+            return []
+        if self._ring is None:
+            period = float(np.median(np.diff(times))) if k > 1 else 1.0 / 30.0
+            self._allocate(period if period > 0 else 1.0 / 30.0)
+        if self.n_frames and not times[0] > self._prev_frame_time:
+            raise ValueError(
+                f"timestamps must increase: {times[0]:.6g} s follows {self._prev_frame_time:.6g} s"
+            )
+        if np.any(np.diff(times) <= 0) or not np.all(np.isfinite(times)):
+            raise ValueError("timestamps within a chunk must be finite and increasing")
+        assert self._ring is not None and self._times is not None
+        self._ring.extend(values)
+        self._times.extend(times[:, None])
+        self.n_frames += k
+        self._prev_frame_time = float(times[-1])
+        return self._process(self.n_frames - 1, final=False)
+
+    _prev_frame_time = -math.inf
+
+    def flush(self) -> list[SegmentClosed | MovementEnded]:
+        """End of the stream: the last frame's velocity by a backward difference, and the
+        open movement closed at its offset (or the last frame)."""
+        if self.n_frames == 0:
+            return []
+        self._final = True
+        out = self._process(self.n_frames, final=True)
+        out.extend(self._end_movement(self.n_frames - 1, final=True))
+        return out
+
+    def reset(self) -> None:
+        """Forget the stream (buffers kept)."""
+        self.lowpass.reset()
+        self._last_angles = None
+        self._prev_frame_time = -math.inf
+        self._reset_state()
+        if self._ring is not None:
+            self._ring.end = self._times.end = self._z.end = 0  # type: ignore[union-attr]
+
+    # ------------------------------------------------------------------ z
+
+    def _speeds(self, stop: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """z and t of frames [self._next, stop) (velocity by numpy.gradient's rules; the last
+        frame of the stream by a backward difference when ``stop`` is n_frames)."""
+        assert self._ring is not None and self._times is not None
+        a = self._next
+        lo = max(0, a - 1)
+        hi = min(self.n_frames, stop + 1)
+        x = self._ring.window(lo, hi)
+        t = self._times.window(lo, hi)[:, 0]
+        idx = np.arange(a, stop)
+        i = idx - lo
+        v = np.empty((idx.size, x.shape[1]))
+        n = hi - lo
+        inner = (idx > 0) & (i + 1 < n)
+        if np.any(inner):
+            ii = i[inner]
+            hs = (t[ii] - t[ii - 1])[:, None]
+            hd = (t[ii + 1] - t[ii])[:, None]
+            v[inner] = (hs**2 * x[ii + 1] - hd**2 * x[ii - 1] + (hd**2 - hs**2) * x[ii]) / (
+                hs * hd * (hd + hs)
+            )
+        first = idx == 0
+        if np.any(first):
+            v[first] = (x[1] - x[0]) / (t[1] - t[0]) if n > 1 else 0.0
+        last = ~inner & ~first
+        if np.any(last):
+            ii = i[last]
+            v[last] = (x[ii] - x[ii - 1]) / (t[ii] - t[ii - 1])[:, None]
+        return np.einsum("ij,ij->i", v, v), t[i]
+
+    # ------------------------------------------------------------------ SEG-2
+
+    def _is_stop(self, z: float, c: float) -> bool:
+        return z <= (ROBUST_REST * c if self.robust else _STILL * c)
+
+    def _process(self, newest: int, *, final: bool) -> list[SegmentClosed | MovementEnded]:
+        stop = self.n_frames if final else newest  # frame `newest` waits for its successor
+        if stop <= self._next:
+            return []
+        zs, ts = self._speeds(stop)
+        assert self._z is not None and self._times is not None
+        out: list[SegmentClosed | MovementEnded] = []
+        z_list = zs.tolist()
+        t_list = ts.tolist()
+        # A frame's decision needs its successor (velocity): the event time is that frame's.
+        last = self.n_frames - 1
+        e_list = self._times.window(self._next + 1, min(stop + 1, last + 1))[:, 0].tolist()
+        while len(e_list) < len(t_list):
+            e_list.append(float(self._times.frame(last)[0]))
+        self._z.extend(zs[:, None])
+        base = self._next
+        for j, (z, t, emitted) in enumerate(zip(z_list, t_list, e_list, strict=True)):
+            self._step(base + j, z, t, emitted, out)
+        self._next = stop
+        return out
+
+    def _threshold(self, f: int) -> float:
+        if self.threshold == "fixed":
+            return self.c
+        if f % _EVERY == 0:
+            assert self._z is not None
+            a = max(self._z.start, f + 1 - self._window_frames)
+            s = float(np.quantile(self._z.window(a, f + 1), 0.95))
+            self._ck = min(max(ROBUST_FRACTION * s, self.c / ROBUST_SLOWEST), self.c)
+        return self._ck
+
+    def _step(
+        self, f: int, z: float, t: float, emitted: float, out: list[SegmentClosed | MovementEnded]
+    ) -> None:
+        c = self._threshold(f)
+        speed = math.sqrt(z)
+        step = 0.5 * (speed + self._prev_speed) * (t - self._prev_t) if f > 0 else 0.0
+        local_min_back = f == 0 or (self._prev_z >= z)
+        self._prev_speed, self._prev_t = speed, t
+        prev_z, self._prev_z = self._prev_z, z
+        stop = self._is_stop(z, c) or z <= _STILL * c
+        if not self.robust:
+            stop = stop or local_min_back
+        if z >= c:
+            if not self._in_run:
+                self._in_run = True
+                self._run_start = f
+                self._run_travel = 0.0
+                self._run_sig = False
+                self._run_min = (z, f)
+            else:
+                self._run_travel += step
+                if z < self._run_min[0]:
+                    self._run_min = (z, f)
+            if not self._run_sig and self._run_travel > self.min_travel:
+                self._run_sig = True
+                self._significant(f, t, emitted, out)
+        else:
+            if self._in_run:
+                self._in_run = False
+                if self._run_sig:
+                    # A significant run ended: the gap starts here.
+                    self._gap_min = (math.inf, -1)
+                    self._offset = -1
+                    self._last_run_end_t = t
+                elif self._open:
+                    if self._run_min[0] < self._gap_min[0]:
+                        self._gap_min = self._run_min
+            if self._open and z < self._gap_min[0]:
+                self._gap_min = (z, f)
+            # The movement's offset if no run follows: the first stop after the last run
+            # (robust: at rest; by repetitions: the first local minimum of z).
+            if self._open and self._offset < 0:
+                if self.robust and stop:
+                    self._offset = f
+                elif not self.robust and (z <= _STILL * c):
+                    self._offset = f
+                elif not self.robust and z >= prev_z and f - 1 >= 0 and prev_z < c:
+                    self._offset = f - 1
+        if stop:
+            self._last_stop = f
+        # Forced cut of an over-long segment.
+        if self._open and f - self._boundary >= self._max_frames - 1:
+            out.append(self._close(self._boundary, f, emitted, forced=True))
+            self._boundary = f
+            self._gap_min = (math.inf, -1)
+        # End of the movement after the rest timeout.
+        if (
+            self._open
+            and not self._in_run
+            and self._offset >= 0
+            and t - self._last_run_end_t >= self.rest_timeout
+        ):
+            out.extend(self._end_movement(f, final=False, emitted=emitted))
+
+    def _significant(
+        self, f: int, t: float, emitted: float, out: list[SegmentClosed | MovementEnded]
+    ) -> None:
+        if not self._open:
+            self._open = True
+            self.movement += 1
+            self._n_seg = 0
+            assert self._ring is not None
+            self._boundary = max(self._last_stop, self._ring.start, f - self._max_frames + 2)
+            self._movement_start = self._movement_time(self._boundary)
+            return
+        b = self._gap_min[1]
+        if b < 0 or b <= self._boundary:
+            return
+        out.append(self._close(self._boundary, b, emitted, forced=False))
+        self._boundary = b
+
+    def _end_movement(
+        self, f: int, *, final: bool, emitted: float | None = None
+    ) -> list[SegmentClosed | MovementEnded]:
+        """Close the open movement: its last segment, then a MovementEnded (no class)."""
+        out: list[SegmentClosed | MovementEnded] = []
+        if not self._open:
+            return out
+        assert self._times is not None
+        if emitted is None:
+            emitted = float(self._times.frame(self.n_frames - 1)[0])
+        end = self._offset if self._offset >= 0 else (self.n_frames - 1 if final else f)
+        if self._in_run and final:
+            end = self.n_frames - 1
+        if end > self._boundary:
+            out.append(self._close(self._boundary, end, emitted, forced=False))
+        out.append(
+            MovementEnded(
+                start=self._movement_start,
+                end=self._movement_time(end),
+                label="",
+                confidence=0.0,
+                n_segments=self._n_seg,
+                movement=self.movement,
+                emitted=emitted,
+            )
+        )
+        #: Frames received when each movement end was decided (for the recogniser).
+        self.decided.append(self.n_frames if final else min(f + 2, self.n_frames))
+        self._open = False
+        self._gap_min = (math.inf, -1)
+        self._offset = -1
+        return out
+
+    def _movement_time(self, f: int) -> float:
+        """When the movement was where the filtered frame ``f`` shows it: ``shift`` frames
+        earlier, but not before the stream's first frame; the stream's last frame (an open
+        end at the end of the stream) stays itself."""
+        if self._final and f == self.n_frames - 1:
+            return self._time(f)
+        return self._time(max(f - self._shift, 0))
+
+    _final = False
+
+    def _time(self, f: int) -> float:
+        """Time of frame ``f`` (before the first frame: extrapolated by the frame period)."""
+        assert self._times is not None
+        first = self._times.start
+        if f >= first:
+            return float(self._times.frame(f)[0])
+        t0 = float(self._times.frame(first)[0])
+        t1 = float(self._times.frame(first + 1)[0]) if self._times.end > first + 1 else t0
+        return t0 - (first - f) * (t1 - t0)
+
+    def _close(self, a: int, b: int, emitted: float, *, forced: bool) -> SegmentClosed:
+        assert self._ring is not None
+        a = max(a, self._ring.start)
+        values = self._ring.window(a, b + 1)
+        start, end = self._movement_time(a), self._movement_time(b)
+        sv = vectors_from_frames(
+            values,
+            [0.0],
+            [float(b - a)],
+            trial=[0],
+            starts=[start],
+            ends=[end],
+            n_samples=int(self.model.n_samples),
+            periodic_channels=self._vector_periodic,
+            offsets=str(self.model.offsets),
+        )
+        p = self.model.transform(sv.vectors)
+        labels, dist = self.model.assign(p)
+        amplitude = 1.0
+        if str(self.model.offsets) == "mean":
+            k = int(labels[0])
+            rebuilt = self.model.cluster_centers_[k] @ self.model.components_.T + self.model.mean_
+            amplitude = float(amplitude_gains(sv.vectors, rebuilt[None, :])[0])
+        index = self._n_seg
+        self._n_seg += 1
+        return SegmentClosed(
+            start=start,
+            end=end,
+            primitive=int(labels[0]),
+            distance=float(dist[0]),
+            amplitude=amplitude,
+            movement=self.movement,
+            index=index,
+            forced=forced,
+            emitted=emitted,
+        )
