@@ -61,6 +61,7 @@ def _run_corpus(args: argparse.Namespace) -> int:
     from visprim.io.corpus import Corpus, GeneratedCorpus
     from visprim.modelfile import save_model
 
+    out = outputs.check_file(args.out, (".npz",), force=args.force, what="model file")
     data = list(args.data or [])
     if data and args.generated:
         raise common.UsageError("give DATA files or --generated, not both")
@@ -84,7 +85,7 @@ def _run_corpus(args: argparse.Namespace) -> int:
         raise common.CLIError(f"{exc}{hint}") from None
     except (ImportError, RuntimeError, OSError) as exc:
         raise common.CLIError(str(exc)) from None
-    path = save_model(model, args.out)
+    path = save_model(model, out)
     print(f"learned by {how} from {len(corpus)} items")
     print(common.summary(model, len(model.trial_names_)))
     print("(error tables need the training vectors: run learn without --dask/--stream)")
