@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import visprim.cli.learn as learn_cli
-from visprim.cli import common, main
+from visprim.cli import main
 from visprim.cli.logs import configured
 from visprim.cli.main import COMMANDS, one_line
 from visprim.datasets import imitation_experiment
@@ -243,14 +243,6 @@ def test_short_trials_kept_left_out_or_refused(tmp_path, monkeypatch, capsys):
     line = one_error_line(capsys, "learn")
     assert "tiny (20 frames)" in line and "--short reduce" in line
     assert not (tmp_path / "c.npz").exists()
-
-
-def test_option_choices_match_the_readers():
-    from visprim.io.assemble import UP_AXES
-    from visprim.io.gaps import ON_GAP
-
-    assert common.ON_GAP_CHOICES == ON_GAP
-    assert common.UP_AXIS_CHOICES == UP_AXES
 
 
 def test_learn_real_recordings_as_given(shared_data, tmp_path, capsys):

@@ -156,3 +156,26 @@ def test_the_printed_seg2_constant_given_back_cuts_the_same_segments(tmp_path, c
     np.testing.assert_allclose(given.segment_ends_, tuned.segment_ends_)
     # The tables are printed in deg^2, as report and demo print them.
     assert "(deg^2)" in out and "(rad^2)" not in out
+
+
+def test_reader_options_are_declared_once():
+    """read, read_pieces and read_many take exactly the declared options, with the declared
+    defaults; the command line offers the declared choices."""
+    from visprim import io
+
+    for fn in (io.read, io.read_pieces):
+        sig = inspect.signature(fn).parameters
+        declared = {n: o.default for n, o in params.READ_OPTIONS.items()}
+        assert {n: sig[n].default for n in sig if n not in ("path", "arm")} == declared
+    assert set(io.read_option_names()) == {"arm", *params.READ_OPTIONS}
+    parser = build_parser()
+    learn = next(
+        a
+        for a in parser._subparsers._group_actions[0].choices["learn"]._actions  # type: ignore[union-attr]
+        if "--on-gap" in a.option_strings
+    )
+    assert tuple(learn.choices) == params.ON_GAP
+    # Only what the user gave reaches the readers.
+    assert common.reader_options(_args("learn", "--out", "m.npz")) == {"arm": "right"}
+    given = common.reader_options(_args("learn", "--out", "m.npz", "--on-gap", "longest"))
+    assert given == {"arm": "right", "on_gap": "longest"}

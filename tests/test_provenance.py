@@ -223,3 +223,12 @@ def test_report_refuses_a_device_in_one_line(tmp_path, capsys, device):
     assert main(["report", device, "--out", str(tmp_path / "r")]) == 1
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "not a regular file" in err and device in err
+
+
+@pytest.mark.parametrize("existing", ["keep.npz", "notes.txt"])
+def test_a_streamed_learn_checks_its_output_first(tmp_path, capsys, existing):
+    target = tmp_path / existing
+    target.write_text("precious", encoding="utf-8")
+    assert main(["learn", "--out", str(target), *SMALL, "--stream"]) == 2
+    assert target.read_text(encoding="utf-8") == "precious"
+    assert "--out" in capsys.readouterr().err

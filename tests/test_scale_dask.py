@@ -171,3 +171,17 @@ def test_a_task_that_keeps_killing_workers_ends_with_a_clear_error(client, in_me
     corpus = KillOnce(str(tmp_path / "killed"), victim=3, always=True)
     with pytest.raises(RuntimeError, match="kept killing workers"):
         PrimitiveModel(**params).fit(corpus, client=client)
+
+
+def test_report_redraws_a_dask_model_from_its_own_data(client, tmp_path, capsys):
+    from visprim.cli import main
+    from visprim.provenance import Provenance
+
+    m = PrimitiveModel(**PARAMS).fit(GeneratedCorpus(2, 6, 0, preset="strokes"), client=client)
+    assert m.provenance_ == Provenance.generated(2, 6, 0, "strokes")
+    m.save(tmp_path / "m.npz")
+    assert main(["report", str(tmp_path / "m.npz"), "--out", str(tmp_path / "r")]) == 0
+    page = (tmp_path / "r" / "index.html").read_text(encoding="utf-8")
+    err = capsys.readouterr().err
+    assert "cannot read the training data" not in err
+    assert "strokes" in page and "Error tables are not available" in page

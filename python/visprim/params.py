@@ -364,3 +364,48 @@ def check_params(params: Mapping[str, Any], owner: str = "PrimitiveModel") -> No
         why = p.check(value)
         if why is not None:
             raise ValueError(f"{owner} parameter {name}={value!r}: {why}")
+
+
+# ---------------------------------------------------------------------------- reader options
+
+#: What happens at a recording gap longer than ``max_gap`` (:mod:`visprim.io.gaps`).
+ON_GAP: tuple[str, ...] = ("split", "longest", "raise")
+#: How gaps up to ``max_gap`` are filled (:mod:`visprim.io.gaps`).
+GAP_METHODS: tuple[str, ...] = ("cubic", "pchip", "linear")
+#: A file's vertical axis (:mod:`visprim.io.assemble`).
+UP_AXES: tuple[str, ...] = ("+x", "-x", "+y", "-y", "+z", "-z")
+#: Which markers a C3D trial carries: the arm's virtual sensors or the file's own.
+MARKER_SOURCES: tuple[str, ...] = ("virtual", "file")
+
+
+@dataclass(frozen=True)
+class ReadOption:
+    """One keyword option of :func:`visprim.io.read_pieces` (and ``read``, ``read_many``,
+    :class:`visprim.io.Corpus`): its default and the formats it applies to (None: all)."""
+
+    name: str
+    default: Any
+    formats: tuple[str, ...] | None = None
+
+
+#: Every reader option (besides ``arm``), declared once: the readers, their checks, the
+#: lazy corpus and the command line's reader options read this.
+READ_OPTIONS: Mapping[str, ReadOption] = {
+    o.name: o
+    for o in (
+        ReadOption("skeleton", None, ("amc",)),
+        ReadOption("rate", None, ("amc",)),
+        ReadOption("mapping", None, ("bvh", "amc", "c3d")),
+        ReadOption("preset", None, ("bvh", "amc", "c3d")),
+        ReadOption("up_axis", None, ("bvh", "amc", "c3d", "amass")),
+        ReadOption("units", None, ("bvh",)),
+        ReadOption("markers", "virtual"),
+        ReadOption("max_gap", 0.2),
+        ReadOption("on_gap", "split"),
+        ReadOption("gap_method", "cubic"),
+        ReadOption("min_duration", 0.5),
+        ReadOption("resample", None),
+        ReadOption("repetitions", None),
+        ReadOption("mirror", False, ("bvh", "amc", "c3d", "amass")),
+    )
+}

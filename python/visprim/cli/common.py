@@ -28,7 +28,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from visprim.params import SHORT_POLICIES, SHORT_POLICY, STUDY_FRAME_PERIOD_S
+from visprim.params import ON_GAP, SHORT_POLICIES, SHORT_POLICY, STUDY_FRAME_PERIOD_S, UP_AXES
 from visprim.provenance import PRESETS, Provenance
 from visprim.trial import EACH_ARM, Trial
 
@@ -38,10 +38,6 @@ log = logging.getLogger(__name__)
 DEFAULT_RESAMPLE_S = STUDY_FRAME_PERIOD_S
 #: Accepted range of ``--resample`` (s): 0.1 ms to 10 s.
 RESAMPLE_RANGE_S = (1e-4, 10.0)
-#: ``--on-gap`` choices (those of :data:`visprim.io.gaps.ON_GAP`; a test keeps them equal).
-ON_GAP_CHOICES = ("split", "longest", "raise")
-#: ``--up-axis`` choices (:data:`visprim.io.assemble.UP_AXES`; a test keeps them equal).
-UP_AXIS_CHOICES = ("+x", "-x", "+y", "-y", "+z", "-z")
 
 
 # ---------------------------------------------------------------------------- errors
@@ -284,14 +280,14 @@ def add_reader_options(p: argparse.ArgumentParser, *, many: bool = True) -> None
     )
     g.add_argument(
         "--up-axis",
-        choices=UP_AXIS_CHOICES,
+        choices=UP_AXES,
         default=None,
         help="the files' vertical axis (default: +y for BVH/AMC, detected for C3D)",
     )
     g.add_argument(
         "--on-gap",
-        choices=ON_GAP_CHOICES,
-        default="split",
+        choices=ON_GAP,
+        default=None,
         help="C3D gaps longer than 0.2 s: split the recording (default), keep the longest "
         "piece, or stop with an error",
     )
@@ -357,8 +353,8 @@ def reader_options(args: argparse.Namespace, *, allow_each: bool = False) -> dic
         value = getattr(args, name, None)
         if value is not None:
             opts[name] = value
-    on_gap = getattr(args, "on_gap", "split")
-    if on_gap != "split":
+    on_gap = getattr(args, "on_gap", None)
+    if on_gap is not None:
         opts["on_gap"] = on_gap
     return opts
 

@@ -54,6 +54,7 @@ from visprim.io.errors import (
 from visprim.io.gaps import check_gap_options
 from visprim.io.presets import MARKER_PRESETS, RIG_PRESETS, check_arm
 from visprim.io.resample import check_resample_period, resample_trial
+from visprim.params import MARKER_SOURCES, READ_OPTIONS
 from visprim.trial import Trial, TrialError
 
 __all__ = [
@@ -85,15 +86,10 @@ FORMATS: dict[str, str] = {
     ".npz": "amass",
 }
 #: Options that only apply to some formats (the marker CSV is already an arm trial in the
-#: common frame). read() refuses them for other files; read_many() passes them only there.
+#: common frame; declared in :data:`visprim.params.READ_OPTIONS`). read() refuses them for
+#: other files; read_many() passes them only there.
 _FORMAT_OPTIONS: dict[str, tuple[str, ...]] = {
-    "skeleton": ("amc",),
-    "rate": ("amc",),
-    "units": ("bvh",),
-    "mapping": ("bvh", "amc", "c3d"),
-    "preset": ("bvh", "amc", "c3d"),
-    "up_axis": ("bvh", "amc", "c3d", "amass"),
-    "mirror": ("bvh", "amc", "c3d", "amass"),
+    o.name: o.formats for o in READ_OPTIONS.values() if o.formats is not None
 }
 
 #: Bandai-Namco file names: ``dataset-<n>_<content>_<style>_<take>`` (the stem).
@@ -134,24 +130,28 @@ def _format_of(path: Path) -> str:
     return FORMATS[ext]
 
 
+#: The readers' defaults (:data:`visprim.params.READ_OPTIONS`).
+_D: dict[str, Any] = {o.name: o.default for o in READ_OPTIONS.values()}
+
+
 def read_pieces(
     path: str | os.PathLike[str],
     arm: str = "right",
     *,
-    skeleton: str | os.PathLike[str] | None = None,
-    rate: float | None = None,
-    mapping: Mapping[str, str | Sequence[str]] | None = None,
-    preset: str | None = None,
-    up_axis: str | None = None,
-    units: str | float | None = None,
-    markers: str = "virtual",
-    max_gap: float = 0.2,
-    on_gap: str = "split",
-    gap_method: str = "cubic",
-    min_duration: float = 0.5,
-    resample: float | None = None,
-    repetitions: int | None = None,
-    mirror: bool = False,
+    skeleton: str | os.PathLike[str] | None = _D["skeleton"],
+    rate: float | None = _D["rate"],
+    mapping: Mapping[str, str | Sequence[str]] | None = _D["mapping"],
+    preset: str | None = _D["preset"],
+    up_axis: str | None = _D["up_axis"],
+    units: str | float | None = _D["units"],
+    markers: str = _D["markers"],
+    max_gap: float = _D["max_gap"],
+    on_gap: str = _D["on_gap"],
+    gap_method: str = _D["gap_method"],
+    min_duration: float = _D["min_duration"],
+    resample: float | None = _D["resample"],
+    repetitions: int | None = _D["repetitions"],
+    mirror: bool = _D["mirror"],
 ) -> list[Trial]:
     """Read one recording as a list of trials (several when long gaps split it).
 
@@ -300,20 +300,20 @@ def read(
     path: str | os.PathLike[str],
     arm: str = "right",
     *,
-    skeleton: str | os.PathLike[str] | None = None,
-    rate: float | None = None,
-    mapping: Mapping[str, str | Sequence[str]] | None = None,
-    preset: str | None = None,
-    up_axis: str | None = None,
-    units: str | float | None = None,
-    markers: str = "virtual",
-    max_gap: float = 0.2,
-    on_gap: str = "split",
-    gap_method: str = "cubic",
-    min_duration: float = 0.5,
-    resample: float | None = None,
-    repetitions: int | None = None,
-    mirror: bool = False,
+    skeleton: str | os.PathLike[str] | None = _D["skeleton"],
+    rate: float | None = _D["rate"],
+    mapping: Mapping[str, str | Sequence[str]] | None = _D["mapping"],
+    preset: str | None = _D["preset"],
+    up_axis: str | None = _D["up_axis"],
+    units: str | float | None = _D["units"],
+    markers: str = _D["markers"],
+    max_gap: float = _D["max_gap"],
+    on_gap: str = _D["on_gap"],
+    gap_method: str = _D["gap_method"],
+    min_duration: float = _D["min_duration"],
+    resample: float | None = _D["resample"],
+    repetitions: int | None = _D["repetitions"],
+    mirror: bool = _D["mirror"],
 ) -> Trial:
     """Read one recording as one :class:`~visprim.trial.Trial`.
 
@@ -321,22 +321,8 @@ def read(
     several pieces, raises :class:`GapError` (use :func:`read_pieces` / :func:`read_many`
     for all pieces, or ``on_gap="longest"``).
     """
-    options: dict[str, Any] = {
-        "skeleton": skeleton,
-        "rate": rate,
-        "mapping": mapping,
-        "preset": preset,
-        "up_axis": up_axis,
-        "units": units,
-        "markers": markers,
-        "max_gap": max_gap,
-        "on_gap": on_gap,
-        "gap_method": gap_method,
-        "min_duration": min_duration,
-        "resample": resample,
-        "repetitions": repetitions,
-        "mirror": mirror,
-    }
+    given = locals()
+    options: dict[str, Any] = {name: given[name] for name in READ_OPTIONS}
     trials = read_pieces(path, arm, **options)
     if len(trials) > 1:
         spans = ", ".join(f"{t.times[0]:.2f}–{t.times[-1]:.2f} s" for t in trials)
@@ -485,22 +471,7 @@ def read_many(
 
 
 #: Keyword options of :func:`read_pieces` (and so of :func:`read_many`).
-_READ_OPTIONS = (
-    "skeleton",
-    "rate",
-    "mapping",
-    "preset",
-    "up_axis",
-    "units",
-    "markers",
-    "max_gap",
-    "on_gap",
-    "gap_method",
-    "min_duration",
-    "resample",
-    "repetitions",
-    "mirror",
-)
+_READ_OPTIONS = tuple(READ_OPTIONS)
 
 
 def read_option_names() -> tuple[str, ...]:
@@ -510,14 +481,14 @@ def read_option_names() -> tuple[str, ...]:
 
 def _check_options(options: Mapping[str, Any]) -> None:
     """Argument checks that do not depend on the file (ValueError naming the argument)."""
-    check_gap_options(
-        options.get("max_gap", 0.2),
-        options.get("on_gap", "split"),
-        options.get("gap_method", "cubic"),
-    )
+
+    def get(name: str) -> Any:
+        return options.get(name, READ_OPTIONS[name].default)
+
+    check_gap_options(get("max_gap"), get("on_gap"), get("gap_method"))
     if options.get("up_axis") is not None:
         check_up_axis(options["up_axis"])
-    if options.get("markers", "virtual") not in ("virtual", "file"):
+    if get("markers") not in MARKER_SOURCES:
         raise ValueError(f"markers must be 'virtual' or 'file', got {options['markers']!r}")
     preset = options.get("preset")
     if preset is not None and preset not in RIG_PRESETS and preset not in MARKER_PRESETS:

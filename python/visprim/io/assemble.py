@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from visprim import params
 from visprim.io.errors import MalformedFileError
 from visprim.io.rotations import axis_rotation, nearest_rotation
 
@@ -33,7 +34,7 @@ from visprim.io.rotations import axis_rotation, nearest_rotation
 #: ≈ 0.47 of hand length, hand ≈ 0.108 H, forearm ≈ 0.146 H; Drillis & Contini 1966).
 FINGER_RATIO = 0.45
 
-UP_AXES: tuple[str, ...] = ("+x", "-x", "+y", "-y", "+z", "-z")
+UP_AXES = params.UP_AXES
 
 #: Frame periods (seconds) a recording may have: 10 µs (100 kHz) to 10 s (0.1 Hz). Anything
 #: outside is a damaged header or a unit mistake (milliseconds given as seconds).

@@ -27,10 +27,11 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.interpolate import CubicSpline, PchipInterpolator
 
+from visprim import params
 from visprim.io.errors import GapError
 
-GAP_METHODS: tuple[str, ...] = ("cubic", "pchip", "linear")
-ON_GAP: tuple[str, ...] = ("split", "longest", "raise")
+GAP_METHODS = params.GAP_METHODS
+ON_GAP = params.ON_GAP
 
 
 @dataclass
