@@ -46,9 +46,14 @@ demo: $(RUNTIME)   ## generate the default experiment, learn primitives, write t
 	$(VENV)/bin/visprim demo --out out/demo --force
 	@echo "make: the report is out/demo/index.html (figures, tables and models in out/demo/)"
 
-test: $(DEV)   ## cargo test + pytest
+test: $(DEV)   ## cargo test + pytest, then the kernel tests at every lower SIMD level of this CPU
 	cargo test --release -q
 	$(PY) -m pytest -q
+	for level in $$($(PY) -c 'from visprim import kernels; print(*kernels.simd_levels()[:-1])'); do \
+	  echo "VISPRIM_SIMD=$$level: kernel tests"; \
+	  VISPRIM_SIMD=$$level cargo test --release -q || exit 1; \
+	  VISPRIM_SIMD=$$level $(PY) -m pytest -q tests/test_kernels_signal.py tests/test_kernels_signal_props.py tests/test_kernels_signal_segment.py tests/test_kernels_linalg.py tests/test_kernels_linalg_kmeans.py tests/test_kernels_determinism.py || exit 1; \
+	done
 
 bench: $(DEV)  ## criterion benches + visprim vs numpy/scipy/scikit-learn in one run
 	cargo bench --bench signal --bench linalg

@@ -9,7 +9,7 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use visprim::filter::{butter_sos, sections, sosfiltfilt_ragged, sosfiltfilt_rows};
-use visprim::lanes::{run_block, Level};
+use visprim::lanes::run_block;
 use visprim::resample::resample_segments;
 use visprim::zvc::zero_velocity_crossings_ragged;
 
@@ -118,7 +118,7 @@ fn block_bench<const W: usize>(
         .map(|_| std::array::from_fn(|_| rng.next() - 0.5))
         .collect();
     let mut buf = template.clone();
-    for level in Level::available() {
+    for level in visprim::simd::levels() {
         g.throughput(Throughput::Elements((W * FRAMES) as u64));
         g.bench_function(format!("{level:?}/w{W}/fused"), |b| {
             b.iter(|| {

@@ -274,22 +274,3 @@ def test_eigh_errors() -> None:
         K.eigh(np.eye(3), k=0)
     with pytest.raises(ValueError, match="k must be between 1 and"):
         K.eigh(np.eye(3), k=4)
-
-
-def test_instruction_set_matches_the_cpu_flags() -> None:
-    import platform
-    from pathlib import Path
-
-    cpuinfo = Path("/proc/cpuinfo")
-    if platform.machine() != "x86_64" or not cpuinfo.exists():
-        pytest.skip("reads the x86-64 flags of /proc/cpuinfo")
-    flags = set(
-        next(ln for ln in cpuinfo.read_text().splitlines() if ln.startswith("flags")).split()
-    )
-    if "avx512f" in flags:
-        want = "avx512f"
-    elif {"avx2", "fma"} <= flags:
-        want = "avx2+fma"
-    else:
-        want = "portable"
-    assert K.instruction_set() == want

@@ -75,15 +75,71 @@ def _index(x: ArrayLike, name: str = "offsets") -> Any:
 _offsets = _index
 
 
+# --- SIMD levels ---
+
+SIMD_ENV = "VISPRIM_SIMD"
+"""The environment variable that caps the SIMD level: ``portable``, ``avx2`` or ``avx512``
+(read once, at the first kernel call; unset or empty: the best level this CPU runs)."""
+
+
 def instruction_set() -> str:
-    """The widest SIMD instruction set the kernels use on this CPU, chosen at run time.
+    """The SIMD level the kernels run at: this CPU's best, capped by ``VISPRIM_SIMD``.
+
+    The kernels choose their code at run time (the extension is built for baseline x86-64).
+    ``VISPRIM_SIMD=portable|avx2|avx512`` caps the level, e.g. to test the lower levels on a
+    wider CPU; see :func:`instruction_sets` for what each kernel runs at that level.
 
     Returns:
-        ``"avx512f"`` (the covariance, filter and distance kernels use 512-bit vectors),
-        ``"avx2+fma"`` or ``"portable"`` (plain Rust). Results agree to rounding; the
-        covariance is bit-identical between ``"avx2+fma"`` and ``"avx512f"``.
+        ``"avx512f"`` (the CPU has AVX-512F, AVX-512VL, AVX2, FMA and F16C: 8 doubles per
+        vector), ``"avx2+fma"`` (AVX2 and FMA: 4 doubles per vector) or ``"portable"``
+        (plain Rust, any CPU).
+
+    Raises:
+        ValueError: ``VISPRIM_SIMD`` is not one of ``portable``, ``avx2``, ``avx512``, or names
+            a level this CPU lacks; the message names the variable, its value, the missing CPU
+            features and the CPU's best level. The kernels listed by :func:`instruction_sets`
+            (except ``eigh`` and ``dtw_distances``) raise the same error.
     """
     return _visprim.instruction_set()
+
+
+def instruction_sets() -> dict[str, str]:
+    """What each kernel runs at the level of :func:`instruction_set`, by function name.
+
+    The first word of each value is the instruction set: ``"portable"``, ``"avx2+fma"``,
+    ``"avx512f"``, or ``"faer's"`` (faer's own run-time choice, which ``VISPRIM_SIMD`` does not
+    cap); the rest says where a kernel departs from the level, e.g. the covariance of rows of
+    fewer than 16 values is faer's product at every level, and ``kmeans_plusplus`` has no
+    AVX-512 code. Kernels not listed (filter design, crossings, gradients, SEG-1, clocks) are
+    portable code at every level.
+
+    Results across levels (tested in child processes at every level the CPU runs):
+
+    * ``kmeans``, ``kmeans_predict``, ``kmeans_plusplus``, ``resample_segments``: the same bits
+      at every level;
+    * ``covariance``: the same bits at ``avx2+fma`` and ``avx512f``; at ``portable`` (faer's
+      product) within ``1e-12`` of them, relative to the largest variance;
+    * ``sosfiltfilt``: ``portable`` follows scipy's arithmetic (no fused multiply-adds); the
+      SIMD levels use fused multiply-adds and agree with it within ``1e-12``, relative to the
+      largest input magnitude.
+
+    Returns:
+        ``{kernel name: description}``, e.g. ``{"sosfiltfilt": "avx2+fma (16 signals in
+        lockstep)", ...}``.
+
+    Raises:
+        ValueError: as :func:`instruction_set`.
+    """
+    return dict(_visprim.instruction_sets())
+
+
+def simd_levels() -> list[str]:
+    """The ``VISPRIM_SIMD`` values this CPU runs, lowest first, e.g. ``["portable", "avx2"]``.
+
+    Independent of ``VISPRIM_SIMD`` itself (never raises): ``make test`` uses it to run the
+    kernel tests at every level.
+    """
+    return _visprim.simd_levels()
 
 
 def butter_sos(order: int, cutoff: float) -> _F64:

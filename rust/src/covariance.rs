@@ -8,8 +8,9 @@
 //!
 //! The scatter matrix `Σ (x - mean)(x - mean)ᵀ` of a block of rows is computed on rows
 //! centred by a *shift* (the mean of the first rows of the block), forming only the lower half
-//! of `YᵀY`: with the packed AVX2+FMA kernel of [`crate::gram`] where the CPU has it and rows
-//! have at least 16 values, else with faer's triangular matrix product on small sub-blocks. The
+//! of `YᵀY`: with the packed kernel of [`crate::gram`] at the AVX2+FMA and AVX-512 levels
+//! ([`crate::simd`]) where rows have at least 16 values, else with faer's triangular matrix
+//! product on small sub-blocks (faer chooses its own instructions at run time). The
 //! final correction `- n m mᵀ` (with `m` the mean of the shifted rows) is then tiny compared to
 //! the scatter, so data far from the origin (e.g. positions in metres around an offset) keeps
 //! its precision, unlike the textbook `XᵀX - n μμᵀ`.
@@ -25,6 +26,7 @@ use faer::linalg::matmul::triangular::{matmul, BlockStructure};
 use faer::{Accum, MatMut, MatRef, Par};
 use rayon::prelude::*;
 
+use crate::simd::{self, Level};
 use crate::{buffer, gram};
 use crate::{Error, Result};
 
@@ -71,8 +73,9 @@ impl Moments {
     pub fn from_rows(x: &[f64], n: usize, dim: usize) -> Result<Self> {
         // With the packed Gram kernel, non-finite values are noticed while the rows are packed
         // (and located afterwards); otherwise by a pass of their own.
-        let packed = dim >= GRAM_MIN_DIM && gram::available();
-        if packed {
+        let level = simd::level()?;
+        let packed = (dim >= GRAM_MIN_DIM && gram::available(level)).then_some(level);
+        if packed.is_some() {
             check_len(x, n, dim, "X")?;
         } else {
             check_rows(x, n, dim, "X")?;
@@ -84,7 +87,7 @@ impl Moments {
         // Wide rows without the packed kernel: one part, faer's matrix product parallel over
         // the output (its split never changes the summation order). Otherwise: independent
         // parts in parallel, their number set by `n` alone.
-        let (parts, par) = if dim >= WIDE && !packed {
+        let (parts, par) = if dim >= WIDE && packed.is_none() {
             (1, Par::rayon(0))
         } else {
             (n.div_ceil(MIN_PART_ROWS).clamp(1, MAX_PARTS), Par::Seq)
@@ -272,6 +275,19 @@ pub fn covariance(x: &[f64], n: usize, d: usize) -> Result<(Vec<f64>, Vec<f64>)>
     Moments::from_rows(x, n, d)?.into_mean_covariance()
 }
 
+/// What the covariance (and [`Moments`]) runs at `level`, as `instruction_sets()` reports it.
+pub fn instruction_set(level: Level) -> &'static str {
+    match level {
+        Level::Avx512 if gram::available(level) => {
+            "avx512f (rows of 16 values or more; faer's product below)"
+        }
+        Level::Avx2Fma if gram::available(level) => {
+            "avx2+fma (rows of 16 values or more; faer's product below)"
+        }
+        _ => "faer's product (faer chooses its instructions itself)",
+    }
+}
+
 fn check_len(x: &[f64], n: usize, dim: usize, name: &str) -> Result<()> {
     if Some(x.len()) != n.checked_mul(dim) {
         return Err(Error::Shape(format!(
@@ -319,12 +335,18 @@ fn mirror<const FROM_LOWER: bool>(a: &mut [f64], d: usize) {
     }
 }
 
-/// Sequential statistics of one block of rows (`n ≥ 1`), with the packed Gram kernel
-/// (`packed`) or faer's triangular product, and whether its sums are finite (always true for
-/// faer's path, whose input was checked).
+/// Sequential statistics of one block of rows (`n ≥ 1`), with the packed Gram kernel at
+/// level `packed` or, if `None`, faer's triangular product, and whether its sums are finite
+/// (always true for faer's path, whose input was checked).
 ///
 /// Errors: the `d × d` matrix cannot be allocated (Memory).
-fn block_moments(x: &[f64], n: usize, d: usize, packed: bool, par: Par) -> Result<(Moments, bool)> {
+fn block_moments(
+    x: &[f64],
+    n: usize,
+    d: usize,
+    packed: Option<Level>,
+    par: Par,
+) -> Result<(Moments, bool)> {
     // Shift: mean of the first rows, close to the block mean for any reasonable data.
     let ns = n.min(SHIFT_ROWS);
     let mut shift = vec![0.0; d];
@@ -342,8 +364,8 @@ fn block_moments(x: &[f64], n: usize, d: usize, packed: bool, par: Par) -> Resul
     let mut gram = buffer::try_zeroed_f64(scatter_len(d)?, "the scatter matrix")?;
     let mut colsum = vec![0.0; d];
     let mut finite = true;
-    if packed {
-        finite = gram::shifted_gram_lower(x, n, d, &shift, &mut gram, &mut colsum)?;
+    if let Some(level) = packed {
+        finite = gram::shifted_gram_lower(level, x, n, d, &shift, &mut gram, &mut colsum)?;
     } else {
         faer_gram_lower(x, n, d, &shift, &mut gram, &mut colsum, par)?;
     }
@@ -544,17 +566,35 @@ mod tests {
 
     #[test]
     fn packed_kernel_and_faer_agree() {
-        if !gram::available() {
-            return;
+        for level in simd::levels().into_iter().filter(|&l| gram::available(l)) {
+            for &(n, d) in &[(1usize, 16usize), (700, 16), (3000, 41), (1000, 400)] {
+                let mut x = values(n * d, (n + d) as u64);
+                x.iter_mut().for_each(|v| *v += 3.0);
+                let (packed, ok) = block_moments(&x, n, d, Some(level), Par::Seq).unwrap();
+                let (plain, _) = block_moments(&x, n, d, None, Par::Seq).unwrap();
+                assert!(ok);
+                assert_close(packed.mean(), plain.mean(), 1e-14);
+                assert_close(packed.scatter(), plain.scatter(), 1e-13);
+            }
         }
-        for &(n, d) in &[(1usize, 16usize), (700, 16), (3000, 41), (1000, 400)] {
-            let mut x = values(n * d, (n + d) as u64);
-            x.iter_mut().for_each(|v| *v += 3.0);
-            let (packed, ok) = block_moments(&x, n, d, true, Par::Seq).unwrap();
-            let (plain, _) = block_moments(&x, n, d, false, Par::Seq).unwrap();
+    }
+
+    #[test]
+    fn the_tiles_of_every_level_give_the_same_bits() {
+        let levels: Vec<Level> = simd::levels()
+            .into_iter()
+            .filter(|&l| gram::available(l))
+            .collect();
+        let (n, d) = (3000, 41);
+        let x = values(n * d, 8);
+        let mut first: Option<Moments> = None;
+        for &level in &levels {
+            let (m, ok) = block_moments(&x, n, d, Some(level), Par::Seq).unwrap();
             assert!(ok);
-            assert_close(packed.mean(), plain.mean(), 1e-14);
-            assert_close(packed.scatter(), plain.scatter(), 1e-13);
+            match &first {
+                None => first = Some(m),
+                Some(want) => assert_eq!(want, &m, "{level:?}"),
+            }
         }
     }
 

@@ -319,6 +319,7 @@ pub fn sosfiltfilt_rows(
     n: usize,
     padlen: Option<usize>,
 ) -> Result<Vec<f64>> {
+    let level = crate::simd::level()?;
     validate_sos(sos)?;
     if Some(x.len()) != n_rows.checked_mul(n) {
         return Err(Error::Shape(format!(
@@ -340,7 +341,8 @@ pub fn sosfiltfilt_rows(
     }
     let bases: Vec<usize> = (0..n_rows).map(|r| r * n).collect();
     let mut out = crate::buffer::zeroed_f64(x.len());
-    let finite = lanes::filtfilt_groups(
+    let finite = lanes::filtfilt_groups_at(
+        level,
         &sections(sos),
         x,
         &mut out,
@@ -373,6 +375,7 @@ pub fn sosfiltfilt_ragged(
     offsets: &[i64],
     padlen: Option<usize>,
 ) -> Result<Vec<f64>> {
+    let level = crate::simd::level()?;
     validate_sos(sos)?;
     if channels == 0 || values.is_empty() {
         return Err(Error::Shape(format!(
@@ -414,7 +417,7 @@ pub fn sosfiltfilt_ragged(
     let mut out = crate::buffer::zeroed_f64(values.len());
     // Non-finite values are detected while the blocks are gathered (no extra pass over the
     // corpus); located only if there is one.
-    if !lanes::filtfilt_groups(&sections(sos), values, &mut out, &groups, edge) {
+    if !lanes::filtfilt_groups_at(level, &sections(sos), values, &mut out, &groups, edge) {
         let i = first_non_finite(values).expect("a non-finite value was seen");
         return Err(Error::NonFinite(format!(
             "values contains NaN or infinity (frame {}, channel {})",

@@ -11,31 +11,25 @@
 //! is subtracted, the column sums are formed and non-finite values are noticed (no separate
 //! pass over the input).
 //!
-//! Two tiles, chosen at run time ([`Kernel::detect`]): 8 × 6 with AVX2 and FMA (12 of the 16
+//! Two tiles, chosen by the SIMD level ([`crate::simd`]): 8 × 6 with AVX2 and FMA (12 of the 16
 //! vector registers hold the tile), 16 × 12 where the CPU has AVX-512F (24 of its 32). Every
 //! element of the result is the sum over the rows in row order (blocks in order, rows within a
 //! block in order, each block's partial sum formed by fused multiply-adds from zero, then added
 //! to the total), whatever the tile: the result depends on nothing but the input, and the two
-//! kernels give the same bits. Only used where the CPU has AVX2 and FMA ([`available`]);
+//! kernels give the same bits. Only used at the AVX2+FMA level or above ([`available`]);
 //! callers fall back to faer's triangular product elsewhere.
 
 use crate::buffer;
+use crate::simd::Level;
 use crate::Result;
 
 /// Rows per packed block: the two packings (`2 · KC · dp` values, 408–432 KiB for d = 400)
 /// stay in L2.
 const KC: usize = 64;
 
-/// Whether this CPU runs the kernel (AVX2 and FMA).
-pub fn available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
+/// Whether the kernel runs at `level` (AVX2 and FMA, or AVX-512).
+pub fn available(level: Level) -> bool {
+    cfg!(target_arch = "x86_64") && level >= Level::Avx2Fma
 }
 
 /// One block's products added to one tile: `c[i + j · mr] += Σ_k a[mr · k + i] · b[nr · k + j]`
@@ -53,14 +47,17 @@ pub(crate) struct Kernel {
 }
 
 impl Kernel {
-    /// The widest kernel this CPU runs: 16 × 12 with AVX-512F, 8 × 6 with AVX2 and FMA.
+    /// The kernel of `level` (one this CPU runs): 16 × 12 with AVX-512F, 8 × 6 with AVX2
+    /// and FMA.
     ///
-    /// Panics if [`available`] is false.
-    pub(crate) fn detect() -> Self {
-        assert!(available(), "the Gram kernel needs AVX2 and FMA");
-        // The level the distance kernels detect (and `instruction_set` reports).
+    /// Panics if [`available`] is false at `level` or the CPU does not run `level`.
+    pub(crate) fn at(level: Level) -> Self {
+        assert!(
+            available(level) && crate::simd::cpu_runs(level),
+            "the Gram kernel needs AVX2 and FMA"
+        );
         #[cfg(target_arch = "x86_64")]
-        if crate::sqdist::detected_level() == crate::sqdist::Level::Avx512 {
+        if level == Level::Avx512 {
             return Self::AVX512;
         }
         Self::AVX2
@@ -129,8 +126,10 @@ fn aligned_zeroed(len: usize, what: &str) -> Result<(Vec<f64>, usize)> {
 ///
 /// Errors: the workspace cannot be allocated (Memory).
 ///
-/// Panics if [`available`] is false or the lengths do not match.
+/// Panics if [`available`] is false at `level`, the CPU does not run `level`, or the lengths
+/// do not match.
 pub fn shifted_gram_lower(
+    level: Level,
     x: &[f64],
     n: usize,
     d: usize,
@@ -138,7 +137,7 @@ pub fn shifted_gram_lower(
     gram: &mut [f64],
     colsum: &mut [f64],
 ) -> Result<bool> {
-    gram_lower_with(Kernel::detect(), x, n, d, shift, gram, colsum)
+    gram_lower_with(Kernel::at(level), x, n, d, shift, gram, colsum)
 }
 
 /// [`shifted_gram_lower`] with a given kernel.
@@ -425,12 +424,12 @@ mod tests {
     /// The kernels this CPU runs, the wide tile computed with AVX2 included.
     fn kernels() -> Vec<(&'static str, Kernel)> {
         #[cfg(target_arch = "x86_64")]
-        if available() {
+        if available(crate::simd::active()) {
             let mut all = vec![
                 ("8x6 avx2", Kernel::AVX2),
                 ("16x12 avx2", Kernel::WIDE_AVX2),
             ];
-            if std::arch::is_x86_feature_detected!("avx512f") {
+            if crate::simd::active() == Level::Avx512 {
                 all.push(("16x12 avx512", Kernel::AVX512));
             }
             return all;

@@ -35,6 +35,7 @@ use rayon::prelude::*;
 
 use crate::kmeanspp::{default_local_trials, seed, Rng, SeedData, MAX_LOCAL_TRIALS};
 use crate::lloyd::lloyd;
+use crate::simd::Level;
 use crate::sqdist::{sq_dists, two_nearest, Panel};
 use crate::{Error, Result};
 
@@ -42,6 +43,15 @@ use crate::{Error, Result};
 const GROUP: usize = 64;
 /// Runs of `n_init` computed at the same time (each holds its own bounds and labels).
 const PARALLEL_RUNS: usize = 2;
+
+/// What [`kmeans`] and [`predict`] run at `level`, as `instruction_sets()` reports it.
+pub fn instruction_set(level: Level) -> &'static str {
+    match level {
+        Level::Avx512 => "avx512f (k-means++ seeding: avx2+fma)",
+        Level::Avx2Fma => "avx2+fma",
+        Level::Portable => "portable",
+    }
+}
 
 /// Parameters of [`kmeans`].
 #[derive(Clone, Debug, PartialEq)]
@@ -105,6 +115,7 @@ pub fn kmeans(
     params: &KMeansParams,
     init: Option<&[f64]>,
 ) -> Result<KMeansResult> {
+    crate::simd::level()?;
     let stats = data_stats(x, n, d, "X")?;
     let k = params.k;
     if params.n_init < 1 {
@@ -206,6 +217,7 @@ pub fn predict(
     centers: &[f64],
     k: usize,
 ) -> Result<(Vec<u32>, Vec<f64>)> {
+    crate::simd::level()?;
     check_data(x, n, d, "X")?;
     if k == 0 || Some(centers.len()) != k.checked_mul(d) {
         return Err(Error::Shape(format!(

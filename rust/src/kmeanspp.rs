@@ -129,6 +129,15 @@ impl SeedData {
     }
 }
 
+/// What [`kmeans_plusplus`] runs at `level`, as `instruction_sets()` reports it (there is no
+/// AVX-512 kernel: at that level the single-precision distances run with AVX2 and FMA).
+pub fn instruction_set(level: crate::simd::Level) -> &'static str {
+    match level {
+        crate::simd::Level::Portable => "portable",
+        _ => "avx2+fma",
+    }
+}
+
 /// Choose `k` seeds among the rows of the row-major `n × d` matrix `x` (`1 ≤ k ≤ n`, finite
 /// values, `1 ≤ n_local_trials ≤ 64`, checked by the caller). Returns the row-major `k × d`
 /// centres (rows of `x`) and their row indices.

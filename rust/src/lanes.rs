@@ -42,54 +42,7 @@ pub struct SignalGroup<'a> {
     pub len: usize,
 }
 
-/// The instruction set a kernel is compiled for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Level {
-    Portable,
-    #[cfg(target_arch = "x86_64")]
-    Avx2,
-    #[cfg(target_arch = "x86_64")]
-    Avx512,
-}
-
-impl Level {
-    /// The best level this CPU supports.
-    pub fn detect() -> Level {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx512f")
-                && std::arch::is_x86_feature_detected!("fma")
-            {
-                return Level::Avx512;
-            }
-            if std::arch::is_x86_feature_detected!("avx2")
-                && std::arch::is_x86_feature_detected!("fma")
-            {
-                return Level::Avx2;
-            }
-        }
-        Level::Portable
-    }
-
-    /// Every level this CPU can run (for tests and benchmarks).
-    pub fn available() -> Vec<Level> {
-        let mut v = vec![Level::Portable];
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx2")
-                && std::arch::is_x86_feature_detected!("fma")
-            {
-                v.push(Level::Avx2);
-            }
-            if std::arch::is_x86_feature_detected!("avx512f")
-                && std::arch::is_x86_feature_detected!("fma")
-            {
-                v.push(Level::Avx512);
-            }
-        }
-        v
-    }
-}
+pub use crate::simd::Level;
 
 /// One biquad step of one lane (direct form II transposed, scipy's `sosfilt`): returns the
 /// output and updates the two state variables.
@@ -257,14 +210,19 @@ pub fn run_block<const W: usize, const FUSE: bool>(
     sections: &[Section],
     buf: &mut [[f64; W]],
 ) {
+    assert!(
+        crate::simd::cpu_runs(level),
+        "level {level:?} is not supported by this CPU"
+    );
     match level {
         Level::Portable => block_portable::<W, FUSE>(sections, buf),
-        // SAFETY: `Level::Avx2` / `Level::Avx512` are only produced by `detect`/`available`
-        // after checking that the CPU has these features.
+        // SAFETY: the CPU runs the level (asserted above).
         #[cfg(target_arch = "x86_64")]
-        Level::Avx2 => unsafe { block_avx2::<W, FUSE>(sections, buf) },
+        Level::Avx2Fma => unsafe { block_avx2::<W, FUSE>(sections, buf) },
         #[cfg(target_arch = "x86_64")]
         Level::Avx512 => unsafe { block_avx512::<W, FUSE>(sections, buf) },
+        #[cfg(not(target_arch = "x86_64"))]
+        _ => block_portable::<W, FUSE>(sections, buf),
     }
 }
 
@@ -489,21 +447,24 @@ unsafe fn run_job<const W: usize>(
     job: &Job,
     buf: &mut Vec<[f64; W]>,
 ) -> bool {
-    // SAFETY: forwarded contract (the CPU features by `Level::available`).
+    // SAFETY: forwarded contract (the CPU features checked by `filtfilt_groups_at`).
     unsafe {
         match level {
             Level::Portable => job_portable::<W>(s, job, buf),
             #[cfg(target_arch = "x86_64")]
-            Level::Avx2 => job_avx2::<W>(s, job, buf),
+            Level::Avx2Fma => job_avx2::<W>(s, job, buf),
             #[cfg(target_arch = "x86_64")]
             Level::Avx512 => job_avx512::<W>(s, job, buf),
+            #[cfg(not(target_arch = "x86_64"))]
+            _ => job_portable::<W>(s, job, buf),
         }
     }
 }
 
 /// Filters every signal of every group (forward-backward, odd extension of `edge` samples,
 /// `sosfilt_zi` initial conditions) from `src` into the same positions of `dst`. Returns false
-/// if any input value was NaN or infinite (`dst` is then meaningless).
+/// if any input value was NaN or infinite (`dst` is then meaningless). Runs at
+/// [`crate::simd::active`].
 pub fn filtfilt_groups(
     sections: &[Section],
     src: &[f64],
@@ -511,10 +472,10 @@ pub fn filtfilt_groups(
     groups: &[SignalGroup],
     edge: usize,
 ) -> bool {
-    filtfilt_groups_at(Level::detect(), sections, src, dst, groups, edge)
+    filtfilt_groups_at(crate::simd::active(), sections, src, dst, groups, edge)
 }
 
-/// [`filtfilt_groups`] with a given instruction-set level (which must be available).
+/// [`filtfilt_groups`] at a given level (one this CPU runs).
 pub fn filtfilt_groups_at(
     level: Level,
     sections: &[Section],
@@ -525,15 +486,15 @@ pub fn filtfilt_groups_at(
 ) -> bool {
     assert!(src.len() == dst.len());
     assert!(
-        Level::available().contains(&level),
+        crate::simd::cpu_runs(level),
         "level {level:?} is not supported by this CPU"
     );
     match level {
         #[cfg(target_arch = "x86_64")]
         Level::Avx512 => run_groups::<32>(level, sections, src, dst, groups, edge),
         #[cfg(target_arch = "x86_64")]
-        Level::Avx2 => run_groups::<16>(level, sections, src, dst, groups, edge),
-        Level::Portable => run_groups::<SMALL_LANES>(level, sections, src, dst, groups, edge),
+        Level::Avx2Fma => run_groups::<16>(level, sections, src, dst, groups, edge),
+        _ => run_groups::<SMALL_LANES>(Level::Portable, sections, src, dst, groups, edge),
     }
 }
 
@@ -546,8 +507,17 @@ pub fn lanes_at(level: Level) -> usize {
         #[cfg(target_arch = "x86_64")]
         Level::Avx512 => 32,
         #[cfg(target_arch = "x86_64")]
-        Level::Avx2 => 16,
-        Level::Portable => SMALL_LANES,
+        Level::Avx2Fma => 16,
+        _ => SMALL_LANES,
+    }
+}
+
+/// What the filter runs at `level`, as `instruction_sets()` reports it.
+pub fn instruction_set(level: Level) -> &'static str {
+    match level {
+        Level::Avx512 => "avx512f (32 signals in lockstep, two sections per sweep)",
+        Level::Avx2Fma => "avx2+fma (16 signals in lockstep)",
+        Level::Portable => "portable (8 signals in lockstep, scipy's arithmetic bit for bit)",
     }
 }
 
@@ -659,7 +629,7 @@ mod tests {
                     .map(|i| ((i * 2_654_435_761usize) % 10_007) as f64 / 10_007.0 - 0.5)
                     .collect();
                 let bases: Vec<usize> = (0..count).map(|r| r * len).collect();
-                for level in Level::available() {
+                for level in crate::simd::levels() {
                     let mut dst = vec![f64::NAN; src.len()];
                     let group = SignalGroup {
                         bases: &bases,

@@ -15,6 +15,7 @@ pub mod lanes;
 pub mod ragged;
 pub mod resample;
 pub mod seg1;
+pub mod simd;
 pub mod zvc;
 
 pub mod covariance;
@@ -29,14 +30,31 @@ pub mod dtw_online;
 
 pub use error::{Error, Result};
 
-/// The widest SIMD instruction set the kernels use on this CPU, chosen at run time:
-/// `"avx512f"`, `"avx2+fma"` or `"portable"` (plain Rust, any CPU).
-pub fn instruction_set() -> &'static str {
-    match sqdist::detected_level() {
-        sqdist::Level::Avx512 => "avx512f",
-        sqdist::Level::Avx2 => "avx2+fma",
-        sqdist::Level::Scalar => "portable",
-    }
+/// The SIMD level the kernels run at (the CPU's best, capped by `VISPRIM_SIMD`; see
+/// [`simd`]): `"avx512f"`, `"avx2+fma"` or `"portable"` (plain Rust, any CPU).
+///
+/// Errors: an invalid `VISPRIM_SIMD` (InvalidArgument, see [`simd::level`]).
+pub fn instruction_set() -> Result<&'static str> {
+    Ok(simd::level()?.instruction_set())
+}
+
+/// What each kernel runs at the active level, as `(kernel, instruction set)`; the first word
+/// of each description is `portable`, `avx2+fma`, `avx512f` or `faer's` (faer's own run-time
+/// choice, which `VISPRIM_SIMD` does not cap). Kernels not listed are portable code.
+///
+/// Errors: as [`instruction_set`].
+pub fn instruction_sets() -> Result<Vec<(&'static str, &'static str)>> {
+    let level = simd::level()?;
+    Ok(vec![
+        ("sosfiltfilt", lanes::instruction_set(level)),
+        ("resample_segments", resample::instruction_set(level)),
+        ("covariance", covariance::instruction_set(level)),
+        ("kmeans", kmeans::instruction_set(level)),
+        ("kmeans_predict", level.instruction_set()),
+        ("kmeans_plusplus", kmeanspp::instruction_set(level)),
+        ("eigh", "faer's eigensolver (faer chooses its instructions itself)"),
+        ("dtw_distances", "portable"),
+    ])
 }
 
 #[cfg(feature = "python")]

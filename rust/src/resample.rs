@@ -10,6 +10,7 @@ use rayon::prelude::*;
 
 use crate::buffer;
 use crate::checks::first_non_finite;
+use crate::simd::Level;
 use crate::{Error, Result};
 
 /// Segments per parallel task.
@@ -80,6 +81,7 @@ pub fn resample_segments(
     ends: &[f64],
     n: usize,
 ) -> Result<Vec<f64>> {
+    let level = crate::simd::level()?;
     check(values, channels, starts, ends, n)?;
     let row = output_row(channels, n)?;
     let len = buffer::elements::<f64>(&[starts.len(), channels, n], "the resampled segments")?;
@@ -87,7 +89,7 @@ pub fn resample_segments(
     if out.is_empty() {
         return Ok(out);
     }
-    let kernel = pick_kernel(channels);
+    let kernel = pick_kernel(level, channels);
     out.par_chunks_mut(row.saturating_mul(SEGMENTS_PER_TASK))
         .enumerate()
         .for_each(|(k, chunk)| {
@@ -302,29 +304,32 @@ kernels!(rows_avx2, "avx2,fma");
 #[cfg(target_arch = "x86_64")]
 kernels!(rows_avx512, "avx512f,avx512vl,avx2,fma");
 
-/// The widest build this CPU runs (chosen at run time). The arithmetic is identical in all:
-/// `x * y + z` is never contracted to a fused multiply-add by Rust.
-fn pick_kernel(channels: usize) -> Kernel {
-    let _ = channels;
-    #[cfg(target_arch = "x86_64")]
-    {
-        if channels == 4 && std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2.
-            return |v, _, s, e, n, d| unsafe { resample4_avx2(v, s, e, n, d) };
+/// The kernel for `channels` at `level` (one this CPU runs). The arithmetic is identical in
+/// all: `x * y + z` is never contracted to a fused multiply-add by Rust, so every level gives
+/// the same bits.
+fn pick_kernel(level: Level, channels: usize) -> Kernel {
+    assert!(crate::simd::cpu_runs(level), "{level:?} not available");
+    match level {
+        // SAFETY (all three): the CPU has the features the functions were compiled for.
+        #[cfg(target_arch = "x86_64")]
+        Level::Avx2Fma | Level::Avx512 if channels == 4 => {
+            |v, _, s, e, n, d| unsafe { resample4_avx2(v, s, e, n, d) }
         }
-        if std::arch::is_x86_feature_detected!("avx512f")
-            && std::arch::is_x86_feature_detected!("avx512vl")
-        {
-            // SAFETY: the CPU has the features the function was compiled for.
-            return |v, c, s, e, n, d| unsafe { rows_avx512(v, c, s, e, n, d) };
-        }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
-            // SAFETY: as above.
-            return |v, c, s, e, n, d| unsafe { rows_avx2(v, c, s, e, n, d) };
-        }
+        #[cfg(target_arch = "x86_64")]
+        Level::Avx512 => |v, c, s, e, n, d| unsafe { rows_avx512(v, c, s, e, n, d) },
+        #[cfg(target_arch = "x86_64")]
+        Level::Avx2Fma => |v, c, s, e, n, d| unsafe { rows_avx2(v, c, s, e, n, d) },
+        _ => rows_portable,
     }
-    rows_portable
+}
+
+/// What the resampler runs at `level`, as `instruction_sets()` reports it.
+pub fn instruction_set(level: Level) -> &'static str {
+    match level {
+        Level::Avx512 => "avx512f (4 channels: avx2)",
+        Level::Avx2Fma => "avx2+fma",
+        Level::Portable => "portable",
+    }
 }
 
 #[cfg(test)]
@@ -381,9 +386,11 @@ mod tests {
                 resample_rows_any(&values, channels, &starts, &ends, n, &mut want);
                 let got = resample_segments(&values, channels, &starts, &ends, n).unwrap();
                 assert_eq!(got, want, "channels {channels} n {n}");
-                let mut portable = vec![0.0; want.len()];
-                rows_portable(&values, channels, &starts, &ends, n, &mut portable);
-                assert_eq!(portable, want, "portable, channels {channels} n {n}");
+                for level in crate::simd::levels() {
+                    let mut at = vec![0.0; want.len()];
+                    pick_kernel(level, channels)(&values, channels, &starts, &ends, n, &mut at);
+                    assert_eq!(at, want, "{level:?}, channels {channels} n {n}");
+                }
                 // The last point of a segment ending on the last frame is that frame.
                 for c in 0..channels {
                     assert_eq!(want[c * n + n - 1], values[(frames - 1) * channels + c]);

@@ -8,56 +8,10 @@
 //! instruction set (AVX-512F, AVX2+FMA, portable `f64::mul_add`) therefore returns the same
 //! bits, and the choice is made at run time (the crate is built for baseline x86-64).
 
-use std::sync::OnceLock;
+use crate::simd::{self, Level};
 
 /// Panel columns are padded to a multiple of this.
 pub const PAD: usize = 8;
-
-/// Instruction set used by the kernels.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Level {
-    /// Portable code (`f64::mul_add`).
-    Scalar,
-    /// AVX2 with FMA, 4 lanes.
-    Avx2,
-    /// AVX-512F, 8 lanes.
-    Avx512,
-}
-
-/// The best level this CPU supports (detected once).
-pub fn detected_level() -> Level {
-    static LEVEL: OnceLock<Level> = OnceLock::new();
-    *LEVEL.get_or_init(|| {
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx512f") {
-                return Level::Avx512;
-            }
-            if std::arch::is_x86_feature_detected!("avx2")
-                && std::arch::is_x86_feature_detected!("fma")
-            {
-                return Level::Avx2;
-            }
-        }
-        Level::Scalar
-    })
-}
-
-/// Levels usable on this CPU (for tests comparing them).
-pub fn available_levels() -> Vec<Level> {
-    match detected_level() {
-        Level::Scalar => vec![Level::Scalar],
-        Level::Avx2 => vec![Level::Scalar, Level::Avx2],
-        Level::Avx512 => vec![Level::Scalar, Level::Avx2, Level::Avx512],
-    }
-}
-
-fn supported(level: Level) -> bool {
-    matches!(
-        (level, detected_level()),
-        (Level::Scalar, _) | (_, Level::Avx512) | (Level::Avx2, Level::Avx2)
-    )
-}
 
 /// `k` centres of dimension `d`, transposed and zero-padded to `kpad` columns.
 #[derive(Clone, Debug)]
@@ -128,11 +82,10 @@ impl Panel {
 /// `out[r * kpad + c] = ‖rows[r] - centre c‖²` for every row `r` and centre `c < k`
 /// (columns `k..kpad` hold distances to the zero padding). Each row must have `d` values.
 pub fn sq_dists(rows: &[&[f64]], panel: &Panel, out: &mut [f64]) {
-    sq_dists_at(detected_level(), rows, panel, out)
+    sq_dists_at(simd::active(), rows, panel, out)
 }
 
-/// [`sq_dists`] with an explicit instruction set (must be supported by this CPU; see
-/// [`available_levels`]).
+/// [`sq_dists`] with an explicit instruction set (one this CPU runs; see [`simd::levels`]).
 pub fn sq_dists_at(level: Level, rows: &[&[f64]], panel: &Panel, out: &mut [f64]) {
     let (d, kpad) = (panel.d, panel.kpad);
     assert!(out.len() >= rows.len() * kpad, "output buffer too small");
@@ -141,11 +94,11 @@ pub fn sq_dists_at(level: Level, rows: &[&[f64]], panel: &Panel, out: &mut [f64]
         "row shorter than the panel dimension"
     );
     assert!(
-        supported(level),
+        simd::cpu_runs(level),
         "instruction set {level:?} not available on this CPU"
     );
     match level {
-        Level::Scalar => scalar_dists(rows, panel, out),
+        Level::Portable => scalar_dists(rows, panel, out),
         #[cfg(target_arch = "x86_64")]
         Level::Avx512 => {
             if kpad == PAD {
@@ -167,7 +120,7 @@ pub fn sq_dists_at(level: Level, rows: &[&[f64]], panel: &Panel, out: &mut [f64]
             }
         }
         #[cfg(target_arch = "x86_64")]
-        Level::Avx2 => {
+        Level::Avx2Fma => {
             blocked::<4>(rows, kpad, out, |ptrs, o| unsafe {
                 let mut col = 0;
                 while col < kpad {
@@ -186,10 +139,10 @@ pub fn sq_dist(a: &[f64], b: &[f64]) -> f64 {
     let d = a.len().min(b.len());
     #[cfg(target_arch = "x86_64")]
     if d >= 8 {
-        match detected_level() {
+        match simd::active() {
             Level::Avx512 => return unsafe { x86::one512(a.as_ptr(), b.as_ptr(), d) },
-            Level::Avx2 => return unsafe { x86::one256(a.as_ptr(), b.as_ptr(), d) },
-            Level::Scalar => {}
+            Level::Avx2Fma => return unsafe { x86::one256(a.as_ptr(), b.as_ptr(), d) },
+            Level::Portable => {}
         }
     }
     let mut acc = [0.0f64; 4];
@@ -216,11 +169,11 @@ pub fn sq_dist(a: &[f64], b: &[f64]) -> f64 {
 pub fn two_nearest(v: &[f64]) -> (usize, f64, f64) {
     assert!(!v.is_empty());
     #[cfg(target_arch = "x86_64")]
-    if v.len() >= 8 && detected_level() == Level::Avx512 {
+    if v.len() >= 8 && simd::active() == Level::Avx512 {
         return unsafe { x86::two_nearest512(v) };
     }
     #[cfg(target_arch = "x86_64")]
-    if v.len() >= 4 && detected_level() == Level::Avx2 {
+    if v.len() >= 4 && simd::active() == Level::Avx2Fma {
         // SAFETY: AVX2 detected; `v.len() ≥ 4`.
         return unsafe { x86::two_nearest256(v) };
     }
@@ -361,7 +314,7 @@ pub fn sq_dists32(rows: &[&[f32]], panel: &Panel32, out: &mut [f64]) {
     assert!(out.len() >= rows.len() * kpad);
     assert!(rows.iter().all(|r| r.len() >= d));
     #[cfg(target_arch = "x86_64")]
-    if detected_level() != Level::Scalar {
+    if simd::active() != Level::Portable {
         for col in (0..kpad).step_by(8) {
             // SAFETY: AVX2 and FMA detected; rows hold d values; out holds rows × kpad.
             unsafe { x86::tile32(rows, d, panel.data.as_ptr().add(col), kpad, col, out) };
@@ -401,7 +354,7 @@ pub fn seed_block32(
     assert!(closest.len() == rows.len() && out.len() >= rows.len() * 8);
     assert!(rows.iter().all(|r| r.len() >= panel.d));
     #[cfg(target_arch = "x86_64")]
-    if detected_level() != Level::Scalar {
+    if simd::active() != Level::Portable {
         // SAFETY: AVX2 and FMA detected; rows hold d values; out holds rows × 8.
         unsafe { x86::seed32(rows, closest, panel.d, panel.data.as_ptr(), lim, out, pots) };
         return;
@@ -772,7 +725,7 @@ mod tests {
         let centers = [0.0, 0.0, 3.0, 4.0];
         let panel = Panel::from_centers(&centers, 2, 2);
         let rows: Vec<&[f64]> = vec![&[0.0, 0.0], &[3.0, 0.0]];
-        for level in available_levels() {
+        for level in simd::levels() {
             let mut out = vec![f64::NAN; 2 * panel.kpad()];
             sq_dists_at(level, &rows, &panel, &mut out);
             let k = panel.kpad();
@@ -794,7 +747,7 @@ mod tests {
             let panel = Panel::from_centers(&c, k, d);
             let rows: Vec<&[f64]> = x.chunks_exact(d).collect();
             let kp = panel.kpad();
-            for level in available_levels() {
+            for level in simd::levels() {
                 let mut out = vec![f64::NAN; n * kp];
                 sq_dists_at(level, &rows, &panel, &mut out);
                 for i in 0..n {
@@ -841,7 +794,7 @@ mod tests {
                     .collect();
                 assert_eq!(two_nearest(&v), reference(&v), "{v:?}");
                 #[cfg(target_arch = "x86_64")]
-                if len >= 4 && available_levels().contains(&Level::Avx2) {
+                if len >= 4 && simd::levels().contains(&Level::Avx2Fma) {
                     // SAFETY: AVX2 detected, `len ≥ 4`.
                     let got = unsafe { x86::two_nearest256(&v) };
                     assert_eq!(got, reference(&v), "{v:?}");

@@ -480,6 +480,7 @@ fn kmeans_plusplus<'py>(
     let data: &[f64] = &values;
     let (centers, idx) = py.detach(|| {
         in_pool(n_threads, || -> crate::Result<(Vec<f64>, Vec<usize>)> {
+            crate::simd::level()?;
             km::data_stats(data, n, d, "X")?;
             let trials = n_local_trials.unwrap_or_else(|| kmeanspp::default_local_trials(k));
             km::check_k_and_trials(k, n, trials)?;

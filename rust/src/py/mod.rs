@@ -14,6 +14,8 @@ mod signal;
 #[pymodule]
 fn _visprim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(instruction_set, m)?)?;
+    m.add_function(wrap_pyfunction!(instruction_sets, m)?)?;
+    m.add_function(wrap_pyfunction!(simd_levels, m)?)?;
     signal::register(m)?;
     linalg::register(m)?;
     dtw::register(m)?;
@@ -21,8 +23,23 @@ fn _visprim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// The widest SIMD instruction set the kernels use on this CPU.
+/// The SIMD level the kernels run at (ValueError for an invalid `VISPRIM_SIMD`).
 #[pyfunction]
-fn instruction_set() -> &'static str {
-    crate::instruction_set()
+fn instruction_set() -> PyResult<&'static str> {
+    Ok(crate::instruction_set()?)
+}
+
+/// `(kernel, instruction set)` of every kernel that chooses one (ValueError as above).
+#[pyfunction]
+fn instruction_sets() -> PyResult<Vec<(&'static str, &'static str)>> {
+    Ok(crate::instruction_sets()?)
+}
+
+/// The `VISPRIM_SIMD` values this CPU runs, lowest first (whatever the variable says).
+#[pyfunction]
+fn simd_levels() -> Vec<&'static str> {
+    crate::simd::supported()
+        .into_iter()
+        .map(crate::simd::Level::name)
+        .collect()
 }
