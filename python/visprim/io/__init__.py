@@ -82,6 +82,7 @@ FORMATS: dict[str, str] = {
     ".c3d": "c3d",
     ".csv": "csv",
     ".npz": "amass",
+    ".trc": "trc",
 }
 #: Options that only apply to some formats (the marker CSV is already an arm trial in the
 #: common frame). read() refuses them for other files; read_many() passes them only there.
@@ -89,10 +90,10 @@ _FORMAT_OPTIONS: dict[str, tuple[str, ...]] = {
     "skeleton": ("amc",),
     "rate": ("amc",),
     "units": ("bvh",),
-    "mapping": ("bvh", "amc", "c3d"),
+    "mapping": ("bvh", "amc", "c3d", "trc"),
     "preset": ("bvh", "amc", "c3d"),
-    "up_axis": ("bvh", "amc", "c3d", "amass"),
-    "mirror": ("bvh", "amc", "c3d", "amass"),
+    "up_axis": ("bvh", "amc", "c3d", "amass", "trc"),
+    "mirror": ("bvh", "amc", "c3d", "amass", "trc"),
 }
 
 _BANDAI = re.compile(
@@ -214,6 +215,12 @@ def read_pieces(
 
     if fmt == "csv":
         trials = [_read_csv(p, arm, repetitions)]
+    elif fmt in ("trc", "video"):  # keypoints: visprim.io.trc, visprim.io.video
+        from visprim.io.keypoints import read_keypoint_file
+
+        gaps = {"max_gap": max_gap, "on_gap": on_gap, "gap_method": gap_method}
+        gaps["min_duration"] = min_duration
+        trials = read_keypoint_file(p, fmt, arm, mapping, up_axis, mirror, repetitions, gaps)
     else:
         if arm == "both" and mirror:
             raise ValueError(
