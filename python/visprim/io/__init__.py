@@ -83,6 +83,7 @@ FORMATS: dict[str, str] = {
     ".csv": "csv",
     ".npz": "amass",
     ".trc": "trc",
+    **dict.fromkeys((".mp4", ".avi", ".mov", ".webm", ".mkv"), "video"),
 }
 #: Options that only apply to some formats (the marker CSV is already an arm trial in the
 #: common frame). read() refuses them for other files; read_many() passes them only there.
@@ -92,8 +93,8 @@ _FORMAT_OPTIONS: dict[str, tuple[str, ...]] = {
     "units": ("bvh",),
     "mapping": ("bvh", "amc", "c3d", "trc"),
     "preset": ("bvh", "amc", "c3d"),
-    "up_axis": ("bvh", "amc", "c3d", "amass", "trc"),
-    "mirror": ("bvh", "amc", "c3d", "amass", "trc"),
+    "up_axis": ("bvh", "amc", "c3d", "amass", "trc", "video"),
+    "mirror": ("bvh", "amc", "c3d", "amass", "trc", "video"),
 }
 
 _BANDAI = re.compile(

@@ -462,9 +462,14 @@ def read_keypoint_file(
 ) -> list[Trial]:
     """:func:`visprim.io.read_pieces` for keypoint files: ``fmt`` ``"trc"``
     (:mod:`visprim.io.trc`) or ``"video"`` (:mod:`visprim.io.video`)."""
-    from visprim.io.trc import read_trc_pieces
+    if fmt == "trc":
+        from visprim.io.trc import read_trc_pieces
 
-    trials = read_trc_pieces(path, arm, mapping=mapping, up_axis=up_axis, mirror=mirror, **gaps)
+        trials = read_trc_pieces(path, arm, mapping=mapping, up_axis=up_axis, mirror=mirror, **gaps)
+    else:
+        from visprim.io.video import read_video_pieces
+
+        trials = read_video_pieces(path, arm, mirror=mirror, **gaps)
     if repetitions is not None:
         for tr in trials:
             tr.repetitions = int(repetitions)
