@@ -26,6 +26,8 @@ pub mod sqdist;
 
 pub mod dtw;
 
+pub mod triangulate;
+
 pub use error::{Error, Result};
 
 /// The widest SIMD instruction set the kernels use on this CPU, chosen at run time:

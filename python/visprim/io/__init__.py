@@ -54,6 +54,7 @@ from visprim.io.errors import (
 from visprim.io.gaps import check_gap_options
 from visprim.io.presets import MARKER_PRESETS, RIG_PRESETS, check_arm
 from visprim.io.resample import check_resample_period, resample_trial
+from visprim.io.views import read_views, read_views_pieces
 from visprim.trial import Trial, TrialError
 
 __all__ = [
@@ -72,6 +73,8 @@ __all__ = [
     "read",
     "read_many",
     "read_pieces",
+    "read_views",
+    "read_views_pieces",
     "resample_trial",
 ]
 

@@ -8,6 +8,7 @@ mod dtw;
 mod errors;
 mod linalg;
 mod signal;
+mod triangulate;
 
 /// The compiled extension `visprim._visprim`; its public face is `visprim.kernels`.
 #[pymodule]
@@ -16,6 +17,7 @@ fn _visprim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     signal::register(m)?;
     linalg::register(m)?;
     dtw::register(m)?;
+    triangulate::register(m)?;
     Ok(())
 }
 
