@@ -515,9 +515,9 @@ def test_malformed_asf_errors(tmp_path: Path) -> None:
 
 
 def test_dispatch_errors(tmp_path: Path) -> None:
-    (tmp_path / "a.trc").write_text("x")
-    with pytest.raises(UnknownFormatError, match=r"a\.trc: unknown extension '\.trc'"):
-        read(tmp_path / "a.trc")
+    (tmp_path / "a.xyz").write_text("x")
+    with pytest.raises(UnknownFormatError, match=r"a\.xyz: unknown extension '\.xyz'"):
+        read(tmp_path / "a.xyz")
     (tmp_path / "s.asf").write_text(ASF)
     with pytest.raises(UnknownFormatError, match="skeleton without motion"):
         read(tmp_path / "s.asf")
@@ -571,7 +571,7 @@ def test_marker_csv_dispatch_round_trip_and_options(tmp_path: Path) -> None:
     assert np.abs(back.markers - trial.markers).max() <= 0.5e-5 + 1e-12
     assert np.abs(back.times - trial.times).max() <= 0.5e-6 + 1e-12
     assert read(tmp_path / "mix.csv", repetitions=3).repetitions == 3
-    with pytest.raises(ValueError, match="mirror= applies to bvh/amc/c3d/amass files, not mix.csv"):
+    with pytest.raises(ValueError, match="mirror= applies to bvh/.*amass.* files, not mix.csv"):
         read(tmp_path / "mix.csv", mirror=True)
     with pytest.raises(ValueError, match="one \\(right\\) arm"):
         read(tmp_path / "mix.csv", arm="left")

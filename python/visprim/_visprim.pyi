@@ -158,3 +158,10 @@ def dtw_distances(
     normalize: bool = True,
     n_threads: int | None = None,
 ) -> NDArray[np.float64]: ...
+def triangulate_points(
+    projections: NDArray[np.float64],
+    points: NDArray[np.float64],
+    weights: NDArray[np.float64],
+    *,
+    min_views: int = 2,
+) -> NDArray[np.float64]: ...

@@ -395,9 +395,9 @@ READ_OPTIONS: Mapping[str, ReadOption] = {
     for o in (
         ReadOption("skeleton", None, ("amc",)),
         ReadOption("rate", None, ("amc",)),
-        ReadOption("mapping", None, ("bvh", "amc", "c3d")),
+        ReadOption("mapping", None, ("bvh", "amc", "c3d", "trc")),
         ReadOption("preset", None, ("bvh", "amc", "c3d")),
-        ReadOption("up_axis", None, ("bvh", "amc", "c3d", "amass")),
+        ReadOption("up_axis", None, ("bvh", "amc", "c3d", "amass", "trc", "video")),
         ReadOption("units", None, ("bvh",)),
         ReadOption("markers", "virtual"),
         ReadOption("max_gap", 0.2),
@@ -406,6 +406,6 @@ READ_OPTIONS: Mapping[str, ReadOption] = {
         ReadOption("min_duration", 0.5),
         ReadOption("resample", None),
         ReadOption("repetitions", None),
-        ReadOption("mirror", False, ("bvh", "amc", "c3d", "amass")),
+        ReadOption("mirror", False, ("bvh", "amc", "c3d", "amass", "trc", "video")),
     )
 }

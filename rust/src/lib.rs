@@ -28,6 +28,8 @@ pub mod sqdist;
 pub mod dtw;
 pub mod dtw_online;
 
+pub mod triangulate;
+
 pub use error::{Error, Result};
 
 /// The SIMD level the kernels run at (the CPU's best, capped by `VISPRIM_SIMD`; see
@@ -52,7 +54,10 @@ pub fn instruction_sets() -> Result<Vec<(&'static str, &'static str)>> {
         ("kmeans", kmeans::instruction_set(level)),
         ("kmeans_predict", level.instruction_set()),
         ("kmeans_plusplus", kmeanspp::instruction_set(level)),
-        ("eigh", "faer's eigensolver (faer chooses its instructions itself)"),
+        (
+            "eigh",
+            "faer's eigensolver (faer chooses its instructions itself)",
+        ),
         ("dtw_distances", "portable"),
     ])
 }

@@ -726,8 +726,7 @@ fn store_bounds(dst: &mut [f32], sq: &[f64]) {
 fn min_except(bounds: &[f32], skip: usize, disp: &[f64]) -> f64 {
     assert!(disp.is_empty() || disp.len() == bounds.len());
     #[cfg(target_arch = "x86_64")]
-    if crate::simd::active() == crate::simd::Level::Avx512 && bounds.len().is_multiple_of(8)
-    {
+    if crate::simd::active() == crate::simd::Level::Avx512 && bounds.len().is_multiple_of(8) {
         // SAFETY: AVX-512F detected; lengths checked above.
         return unsafe { min_except512(bounds, skip, disp) };
     }

@@ -231,14 +231,20 @@ mod tests {
              (its best level is avx2); use portable, avx2, or unset VISPRIM_SIMD"
         );
         let err = choose(Some("avx2"), &cpu(&["avx2"])).unwrap_err();
-        assert!(err.contains("it has no fma (its best level is portable)"), "{err}");
+        assert!(
+            err.contains("it has no fma (its best level is portable)"),
+            "{err}"
+        );
     }
 
     #[test]
     fn an_unknown_value_is_an_error() {
         for bad in ["AVX2", "avx2+fma", "sse4", " portable", "1"] {
             let err = choose(Some(bad), &cpu(AVX2_CPU)).unwrap_err();
-            assert!(err.starts_with(&format!("VISPRIM_SIMD={bad:?} is not")), "{err}");
+            assert!(
+                err.starts_with(&format!("VISPRIM_SIMD={bad:?} is not")),
+                "{err}"
+            );
             assert!(err.contains("this CPU's best is avx2"), "{err}");
         }
     }
@@ -279,11 +285,36 @@ mod tests {
                 }
             }
         }
-        assert!(files.len() > 10, "sources not found under {}", dir.display());
+        assert!(
+            files.len() > 10,
+            "sources not found under {}",
+            dir.display()
+        );
         let known = [
-            "sse", "sse2", "sse3", "ssse3", "sse4.1", "sse4.2", "avx", "avx2", "fma", "f16c",
-            "bmi1", "bmi2", "lzcnt", "popcnt", "avx512f", "avx512vl", "avx512dq", "avx512bw",
-            "avx512cd", "avx512ifma", "avx512vbmi", "avx512vnni", "avx512bf16", "avx512fp16",
+            "sse",
+            "sse2",
+            "sse3",
+            "ssse3",
+            "sse4.1",
+            "sse4.2",
+            "avx",
+            "avx2",
+            "fma",
+            "f16c",
+            "bmi1",
+            "bmi2",
+            "lzcnt",
+            "popcnt",
+            "avx512f",
+            "avx512vl",
+            "avx512dq",
+            "avx512bw",
+            "avx512cd",
+            "avx512ifma",
+            "avx512vbmi",
+            "avx512vnni",
+            "avx512bf16",
+            "avx512fp16",
         ];
         let implied_by_avx2 = ["sse", "sse2", "sse3", "ssse3", "sse4.1", "sse4.2", "avx"];
         let mut lists = 0;

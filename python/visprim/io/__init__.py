@@ -54,6 +54,7 @@ from visprim.io.errors import (
 from visprim.io.gaps import check_gap_options
 from visprim.io.presets import MARKER_PRESETS, RIG_PRESETS, check_arm
 from visprim.io.resample import check_resample_period, resample_trial
+from visprim.io.views import read_views, read_views_pieces
 from visprim.params import MARKER_SOURCES, READ_OPTIONS
 from visprim.trial import Trial, TrialError
 
@@ -74,6 +75,8 @@ __all__ = [
     "read",
     "read_many",
     "read_pieces",
+    "read_views",
+    "read_views_pieces",
     "resample_trial",
 ]
 
@@ -84,6 +87,8 @@ FORMATS: dict[str, str] = {
     ".c3d": "c3d",
     ".csv": "csv",
     ".npz": "amass",
+    ".trc": "trc",
+    **dict.fromkeys((".mp4", ".avi", ".mov", ".webm", ".mkv"), "video"),
 }
 #: Options that only apply to some formats (the marker CSV is already an arm trial in the
 #: common frame; declared in :data:`visprim.params.READ_OPTIONS`). read() refuses them for
@@ -216,6 +221,12 @@ def read_pieces(
 
     if fmt == "csv":
         trials = [_read_csv(p, arm, repetitions)]
+    elif fmt in ("trc", "video"):  # keypoints: visprim.io.trc, visprim.io.video
+        from visprim.io.keypoints import read_keypoint_file
+
+        gaps = {"max_gap": max_gap, "on_gap": on_gap, "gap_method": gap_method}
+        gaps["min_duration"] = min_duration
+        trials = read_keypoint_file(p, fmt, arm, mapping, up_axis, mirror, repetitions, gaps)
     else:
         if arm == "both" and mirror:
             raise ValueError(

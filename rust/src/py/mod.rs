@@ -9,6 +9,7 @@ mod dtw_online;
 mod errors;
 mod linalg;
 mod signal;
+mod triangulate;
 
 /// The compiled extension `visprim._visprim`; its public face is `visprim.kernels`.
 #[pymodule]
@@ -20,6 +21,7 @@ fn _visprim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     linalg::register(m)?;
     dtw::register(m)?;
     dtw_online::register(m)?;
+    triangulate::register(m)?;
     Ok(())
 }
 

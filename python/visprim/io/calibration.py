@@ -1,0 +1,177 @@
+"""Camera calibrations: the Qualisys QCA format → pinhole cameras with lens distortion.
+
+A :class:`Camera` follows OpenCV's conventions: ``R``, ``t`` map world points (metres) to
+camera coordinates (x right, y down, z forward), ``K`` is the pixel matrix and ``dist`` the
+distortion ``(k1, k2, p1, p2, k3)`` of OpenCV's radial-tangential model.
+
+Qualisys QCA (XML, ``<calibration><cameras><camera serial=...>``), converted as Pose2Sim's
+reader does (``Pose2Sim/calibration.py``, ``read_qca``), validated here by the reprojection
+error of the four-view triangulation of the shared Pose2Sim clip (``benches/video_accuracy.py``):
+
+* ``<transform>``: position ``x, y, z`` of the camera in millimetres and a rotation
+  ``r11 … r33``; the world-to-camera rotation is ``Rx(π) · M`` with ``M = [[r11, r12, r13],
+  [r21, r22, r23], [r31, r32, r33]]`` and ``t = −Rx(π) · M · c`` (``c`` the position in
+  metres; ``Rx(π)`` turns Qualisys' camera axes, y up and looking along −z, into OpenCV's);
+* ``<intrinsic>``: focal lengths and principal point in 1/64 sub-pixel sensor units (÷ 64
+  for pixels; the principal point relative to the ``fov_video`` corner), radial
+  ``radialDistortion1–3`` and tangential ``tangentalDistortion1–2`` coefficients;
+* ``<fov_video>``: the image size (``right − left + 1`` × ``bottom − top + 1``).
+"""
+
+from __future__ import annotations
+
+import os
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from visprim.io.errors import MalformedFileError, ReadError
+
+__all__ = ["Camera", "read_calibration", "read_qca"]
+
+_RX_PI = np.diag([1.0, -1.0, -1.0])
+#: Fixed-point iterations of :meth:`Camera.undistort` (converged to < 1e-9 px for the
+#: distortions of ordinary lenses; checked against :meth:`Camera.project` in the tests).
+UNDISTORT_ITERATIONS = 20
+
+
+@dataclass(frozen=True)
+class Camera:
+    """One calibrated camera (see the module docstring); ``size`` = (width, height) px."""
+
+    name: str
+    size: tuple[int, int]
+    K: NDArray[np.float64]
+    dist: NDArray[np.float64]
+    R: NDArray[np.float64]
+    t: NDArray[np.float64]
+
+    @property
+    def projection(self) -> NDArray[np.float64]:
+        """``[R | t]`` (3 × 4): world points → normalised image coordinates."""
+        return np.hstack([self.R, self.t[:, None]])
+
+    @property
+    def centre(self) -> NDArray[np.float64]:
+        """The camera's position in the world (m)."""
+        return -self.R.T @ self.t
+
+    def _distort(self, xy: NDArray[np.float64]) -> NDArray[np.float64]:
+        k1, k2, p1, p2, k3 = self.dist
+        x, y = xy[..., 0], xy[..., 1]
+        r2 = x * x + y * y
+        radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
+        xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+        yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+        return np.stack([xd, yd], axis=-1)
+
+    def project(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
+        """World points (…, 3) m → pixels (…, 2), lens distortion included."""
+        c = points @ self.R.T + self.t
+        with np.errstate(invalid="ignore", divide="ignore"):
+            xy = c[..., :2] / c[..., 2:3]
+        d = self._distort(xy)
+        return np.stack(
+            [self.K[0, 0] * d[..., 0] + self.K[0, 2], self.K[1, 1] * d[..., 1] + self.K[1, 2]],
+            axis=-1,
+        )
+
+    def undistort(self, pixels: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Pixels (…, 2) → undistorted normalised image coordinates (…, 2) (the inverse of
+        :meth:`project`'s last two steps, by fixed-point iteration; NaN stays NaN)."""
+        xd = np.stack(
+            [
+                (pixels[..., 0] - self.K[0, 2]) / self.K[0, 0],
+                (pixels[..., 1] - self.K[1, 2]) / self.K[1, 1],
+            ],
+            axis=-1,
+        )
+        k1, k2, p1, p2, k3 = self.dist
+        xy = xd.copy()
+        for _ in range(UNDISTORT_ITERATIONS):
+            x, y = xy[..., 0], xy[..., 1]
+            r2 = x * x + y * y
+            radial = 1 + r2 * (k1 + r2 * (k2 + r2 * k3))
+            dx = 2 * p1 * x * y + p2 * (r2 + 2 * x * x)
+            dy = p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
+            xy = np.stack([(xd[..., 0] - dx) / radial, (xd[..., 1] - dy) / radial], axis=-1)
+        return xy
+
+
+def _float(path: Path, el: ET.Element, key: str) -> float:
+    raw = el.get(key)
+    if raw is None:
+        raise MalformedFileError(path, f"<{el.tag}> has no {key}")
+    try:
+        value = float(raw)
+    except ValueError:
+        raise MalformedFileError(path, f"<{el.tag}> {key}={raw!r} is not a number") from None
+    if not np.isfinite(value):
+        raise MalformedFileError(path, f"<{el.tag}> {key} is not finite")
+    return value
+
+
+def read_qca(path: str | os.PathLike[str]) -> list[Camera]:
+    """The cameras of a Qualisys QCA calibration, in file order (see the module docstring).
+
+    Raises :class:`ReadError` naming the file and the problem.
+    """
+    p = Path(path)
+    try:
+        root = ET.parse(p).getroot()
+    except OSError as exc:
+        raise ReadError(p, f"cannot read: {exc.strerror or exc}") from None
+    except ET.ParseError as exc:
+        raise MalformedFileError(p, f"not XML ({exc})") from None
+    cams = root.findall("cameras/camera")
+    if not cams:
+        raise MalformedFileError(p, "no <cameras><camera> elements (not a QCA calibration?)")
+    out = []
+    for i, cam in enumerate(cams):
+        name = cam.get("serial") or f"camera{i + 1}"
+        tr, intr, fov = cam.find("transform"), cam.find("intrinsic"), cam.find("fov_video")
+        if tr is None or intr is None or fov is None:
+            raise MalformedFileError(
+                p, f"camera {name} lacks <transform>, <intrinsic> or <fov_video>"
+            )
+        m = np.array(
+            [[_float(p, tr, f"r{r}{c}") for c in (1, 2, 3)] for r in (1, 2, 3)], dtype=np.float64
+        )
+        if not np.allclose(m @ m.T, np.eye(3), atol=1e-6) or np.linalg.det(m) < 0:
+            raise MalformedFileError(p, f"camera {name}: the transform is not a rotation")
+        centre = np.array([_float(p, tr, k) for k in ("x", "y", "z")]) / 1000.0
+        left, top = _float(p, fov, "left"), _float(p, fov, "top")
+        size = (
+            int(_float(p, fov, "right") - left + 1),
+            int(_float(p, fov, "bottom") - top + 1),
+        )
+        fu, fv = _float(p, intr, "focalLengthU") / 64, _float(p, intr, "focalLengthV") / 64
+        if fu <= 0 or fv <= 0:
+            raise MalformedFileError(p, f"camera {name}: focal lengths must be positive")
+        cu = _float(p, intr, "centerPointU") / 64 - left
+        cv = _float(p, intr, "centerPointV") / 64 - top
+        k = np.array([[fu, 0.0, cu], [0.0, fv, cv], [0.0, 0.0, 1.0]])
+        dist = np.array(
+            [
+                _float(p, intr, "radialDistortion1"),
+                _float(p, intr, "radialDistortion2"),
+                _float(p, intr, "tangentalDistortion1"),
+                _float(p, intr, "tangentalDistortion2"),
+                _float(p, intr, "radialDistortion3"),
+            ]
+        )
+        rot = _RX_PI @ m
+        out.append(Camera(name=name, size=size, K=k, dist=dist, R=rot, t=-rot @ centre))
+    return out
+
+
+def read_calibration(path: str | os.PathLike[str]) -> list[Camera]:
+    """Cameras from a calibration file; the Qualisys QCA format (``.qca``, ``.qca.txt``)."""
+    p = Path(path)
+    name = p.name.lower()
+    if name.endswith(".qca") or name.endswith(".qca.txt"):
+        return read_qca(p)
+    raise ReadError(p, "unknown calibration format; supported: Qualisys .qca / .qca.txt")

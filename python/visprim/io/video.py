@@ -1,0 +1,139 @@
+"""Video → pose per frame → :class:`visprim.Trial` (the optional extra ``visprim[video]``).
+
+>>> from visprim.io import read
+>>> trial = read("clip.mp4")                       # right arm; .avi, .mov, .webm, .mkv too
+>>> from visprim.io.video import read_video_pieces
+>>> pieces = read_video_pieces("clip.mp4", arm="both", max_frames=300)
+
+* The pose of each frame comes from a :class:`~visprim.io.video_pose.PoseEstimator`
+  (default: MediaPipe BlazePose, full model, shipped in the wheel — no network), cached by
+  file content and estimator settings (:mod:`visprim.io.video_pose`).
+* Its metric, hip-centred world landmarks become the trial through
+  :func:`visprim.io.keypoints.trial_pieces_from_keypoints`: shoulder, elbow, wrist and hand
+  of each arm, the torso frame from shoulders and hips, the subject turned to face +x.
+* Times come from the video's own clock (each frame's presentation timestamp).
+* Frames without a person, and landmarks below ``min_confidence`` visibility, are gaps with
+  the C3D policy (:mod:`visprim.io.gaps`): short ones filled, long ones split or refused.
+
+People. MediaPipe's pose pipeline follows one person: the most prominent one (highest
+detection score) when tracking starts, kept from frame to frame. A video where nobody is
+found raises :class:`~visprim.io.errors.ReadError` ("no person found"); when the tracked
+body jumps across the image between consecutive frames (another person taken over), a
+warning names the frame. ``person=`` selects a person for estimators that report several;
+with a single-person estimator only ``person=0`` (the default) exists.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from visprim.io.errors import ReadError
+from visprim.io.keypoints import read_error, trial_pieces_from_keypoints
+from visprim.io.video_pose import PoseEstimator, VideoPoses, video_poses
+from visprim.trial import Trial
+
+#: A jump of the hips' image position by more than this fraction of the image diagonal
+#: between consecutive frames is reported as a possible change of person.
+PERSON_JUMP = 0.15
+
+
+def check_person(path: Path, person: int | None) -> None:
+    """Single-person estimators: only person 0 exists."""
+    if person not in (None, 0):
+        raise ValueError(
+            f"person={person!r}: the pose estimator follows one person per video "
+            "(the most prominent when tracking starts); only person=0 exists"
+        )
+
+
+def person_jumps(poses: VideoPoses, hips: tuple[int, int] = (23, 24)) -> list[int]:
+    """Frames where the hips' image centre jumps more than :data:`PERSON_JUMP` × diagonal
+    from the previous frame with a person."""
+    centre = poses.image[:, list(hips)].mean(axis=1)
+    diag = float(np.hypot(*poses.size)) or 1.0
+    idx = np.flatnonzero(poses.found)
+    if idx.size < 2:
+        return []
+    step = np.linalg.norm(np.diff(centre[idx], axis=0), axis=1)
+    return [int(i) for i in idx[1:][step > PERSON_JUMP * diag]]
+
+
+def read_video_pieces(
+    path: str | os.PathLike[str],
+    arm: str = "right",
+    *,
+    mirror: bool = False,
+    estimator: PoseEstimator | None = None,
+    person: int | None = None,
+    min_confidence: float = 0.5,
+    max_frames: int | None = None,
+    cache: bool = True,
+    max_gap: float = 0.2,
+    on_gap: str = "split",
+    gap_method: str = "cubic",
+    min_duration: float = 0.5,
+) -> list[Trial]:
+    """Trials from a video (several when long gaps without a person split it).
+
+    Parameters
+    ----------
+    path : video file
+    arm, mirror, max_gap, on_gap, gap_method, min_duration : as :func:`visprim.io.read_pieces`
+    estimator : a :class:`~visprim.io.video_pose.PoseEstimator` (default MediaPipe)
+    person : see the module docstring
+    min_confidence : landmarks with a lower visibility are missing in that frame
+    max_frames : only the first frames
+    cache : use the pose cache
+    """
+    p = Path(path)
+    check_person(p, person)
+    poses = video_poses(p, estimator, max_frames=max_frames, cache=cache)
+    n = poses.times.shape[0]
+    found = int(poses.found.sum())
+    if found == 0:
+        raise ReadError(p, f"no person found in any of the {n} frames")
+    layout = str(poses.meta["layout"])
+    if layout == "blazepose33":
+        for i in person_jumps(poses):
+            warnings.warn(
+                f"{p}: the tracked person jumps across the image at frame {i} "
+                f"({poses.times[i]:.2f} s); several people in view?",
+                stacklevel=2,
+            )
+    meta: dict[str, Any] = {
+        "format": "video",
+        "rate": poses.meta["rate"],
+        "times_from": poses.meta["times_from"],
+        "estimator": poses.meta["estimator"],
+        "video_size": poses.meta["size"],
+        "frames": n,
+        "person_found": found / n,
+        "pose_cache": poses.meta.get("cache"),
+    }
+    try:
+        return trial_pieces_from_keypoints(
+            poses.world,
+            layout,
+            times=poses.times,
+            confidence=np.where(poses.found[:, None], poses.confidence, 0.0),
+            min_confidence=min_confidence,
+            arm=arm,
+            up_axis=str(poses.meta["up_axis"]),
+            mirror=mirror,
+            max_gap=max_gap,
+            on_gap=on_gap,
+            gap_method=gap_method,
+            min_duration=min_duration,
+            name=p.stem,
+            source=p,
+            meta=meta,
+        )
+    except ReadError:
+        raise
+    except ValueError as exc:
+        raise read_error(p, exc) from None
