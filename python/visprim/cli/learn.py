@@ -61,7 +61,6 @@ def _run_corpus(args: argparse.Namespace, out: Any) -> int:
     from visprim.io.corpus import Corpus, GeneratedCorpus
     from visprim.modelfile import save_model
 
-    out = outputs.check_file(args.out, (".npz",), force=args.force, what="model file")
     data = list(args.data or [])
     if data and args.generated:
         raise common.UsageError("give DATA files or --generated, not both")
