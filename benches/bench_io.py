@@ -64,7 +64,7 @@ def _cases() -> dict[str, tuple[int, str, Callable[[int], str], Callable[[Path],
     try:
         from visprim.io.markers_csv import MarkerCSVError, read_marker_csv
     except ImportError:  # visprim before the marker CSV moved to io/ (for before/after runs)
-        from visprim.markers_csv import MarkerCSVError, read_marker_csv  # type: ignore
+        from visprim.io.markers_csv import MarkerCSVError, read_marker_csv  # type: ignore
 
     def csv(path: Path) -> object:
         try:

@@ -14,7 +14,7 @@ import pytest
 from visprim import PrimitiveModel
 from visprim.cli import main, outputs
 from visprim.datasets import imitation_experiment
-from visprim.markers_csv import write_marker_csv
+from visprim.io.markers_csv import write_marker_csv
 
 SMALL = ["--subjects", "2", "--stimuli", "20", "--clusters", "6", "--n-init", "2"]
 PYTHONPATH = str(Path(__file__).resolve().parents[1] / "python")

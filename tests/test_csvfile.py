@@ -12,7 +12,7 @@ from visprim import PrimitiveModel
 from visprim.cli import main
 from visprim.csvfile import csv_text, safe_cell
 from visprim.datasets import imitation_experiment
-from visprim.markers_csv import write_marker_csv
+from visprim.io.markers_csv import write_marker_csv
 
 EVIL = [
     '=HYPERLINK("http://evil.example","B")',

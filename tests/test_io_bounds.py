@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from test_io_fuzz import AMC, ASF
 from visprim.io import ReadError, read, read_many
-from visprim.markers_csv import write_marker_csv
+from visprim.io.markers_csv import write_marker_csv
 
 PYTHONPATH = str(Path(__file__).resolve().parents[1] / "python")
 
