@@ -38,4 +38,4 @@ def test_importing_visprim_loads_no_heavy_dependency():
 
 def test_the_old_markers_csv_alias_is_gone():
     with pytest.raises(ModuleNotFoundError):
-        import visprim.io.markers_csv  # noqa: F401
+        import visprim.markers_csv  # noqa: F401
