@@ -107,7 +107,8 @@ fn triangulate_one(proj: &[f64], uv: &[f64], w: &[f64], min_views: usize) -> [f6
     }
     let x = smallest_eigenvector(m);
     let norm = x.iter().map(|a| a * a).sum::<f64>().sqrt();
-    if !(x[3].abs() > 1e-12 * norm) {
+    // NaN-safe: a NaN solution also lands here.
+    if x[3].is_nan() || x[3].abs() <= 1e-12 * norm {
         return [f64::NAN; 3];
     }
     [x[0] / x[3], x[1] / x[3], x[2] / x[3]]
@@ -151,7 +152,7 @@ pub fn triangulate(
             i / 12
         )));
     }
-    if weights.len() % views != 0 {
+    if !weights.len().is_multiple_of(views) {
         return Err(Error::Shape(format!(
             "weights hold {} values, not a multiple of {views} views",
             weights.len()
