@@ -69,8 +69,10 @@ def test_mypy_configuration():
     for override in mypy["overrides"]:
         if override.get("ignore_missing_imports"):
             ignored |= set(override["module"])
-    # Only packages without type information: dartpy, and the optional video encoder.
-    assert "dartpy" in ignored and ignored <= {"dartpy", "ezc3d", "imageio_ffmpeg"}
+    # Only packages without type information: dartpy, and the optional video extra's encoder
+    # and pose estimator.
+    assert "dartpy" in ignored
+    assert ignored <= {"dartpy", "ezc3d", "imageio_ffmpeg", "mediapipe", "mediapipe.*"}
     dev = " ".join(PYPROJECT["project"]["optional-dependencies"]["dev"])
     for package in ("mypy", "scipy-stubs", "types-tqdm", "sphinx", "numpydoc"):
         assert package in dev, package

@@ -91,8 +91,9 @@ def test_tables_in_degrees_converts_only_squared_errors():
 
 def test_markdown_table_and_slug():
     html = markdown_table("| a | b |\n|---|---:|\n| 1 | <x> |\n")
-    assert (
-        html == "<table><tr><th>a</th><th>b</th></tr><tr><td>1</td><td>&lt;x&gt;</td></tr></table>"
+    assert html == (
+        '<div class="scroll"><table><tr><th>a</th><th>b</th></tr>'
+        "<tr><td>1</td><td>&lt;x&gt;</td></tr></table></div>"
     )
     assert slug("Error analysis (Tables 1–3)") == "error-analysis-tables-1-3"
 

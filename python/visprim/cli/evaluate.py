@@ -11,9 +11,7 @@ from visprim.cli import common
 
 def run(args: argparse.Namespace) -> int:
     if getattr(args, "online", False):
-        from visprim.online.early import run_cli
-
-        return run_cli(args)
+        return _run_online(args)
     from visprim.classify import MotionClassifier
     from visprim.cli import outputs
     from visprim.evaluate import evaluate, to_markdown, write_report
@@ -183,3 +181,36 @@ def register(sub: Any) -> None:
     )
     common.add_force_option(p)
     p.set_defaults(func=run)
+
+
+def _run_online(args: argparse.Namespace) -> int:
+    """``visprim evaluate --online``: the early-recognition table, printed and written to
+    ``--out`` (``early_recognition.md`` / ``.json``, in a folder moved into place whole)."""
+    from pathlib import Path
+
+    from visprim.cli import outputs
+    from visprim.online.early import evaluate_early, to_markdown, write
+
+    out = outputs.check_folder(args.out, force=args.force, inputs=args.data)
+    classes = [c.strip() for c in args.classes.split(",") if c.strip()] if args.classes else None
+    try:
+        results, notes = evaluate_early(
+            args.data,
+            labels=args.labels,
+            group_by=args.group,
+            classes=classes,
+            period=args.resample,
+            arm=args.arm,
+            jobs=args.jobs,
+        )
+    except ValueError as exc:
+        print(f"visprim evaluate: {exc}", file=sys.stderr)
+        return 2
+    if not results:
+        print("visprim evaluate: no benchmark to run; " + "; ".join(notes), file=sys.stderr)
+        return 2
+    print(to_markdown(results, notes), end="")
+    with outputs.atomic_folder(out, "evaluate") as tmp:
+        paths = write(results, notes, Path(tmp))
+    print("\nwritten: " + ", ".join(str(outputs.moved(p, tmp, out)) for p in paths))
+    return 0

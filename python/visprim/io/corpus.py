@@ -285,7 +285,8 @@ class GeneratedCorpus(LazyCorpus):
         }
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__init__(  # type: ignore[misc]
+        GeneratedCorpus.__init__(
+            self,
             state["n_subjects"],
             state["n_stimuli"],
             state["seed"],

@@ -165,35 +165,3 @@ def write(results: Sequence[EarlyResult], notes: Sequence[str], folder: Path) ->
         encoding="utf-8",
     )
     return [md, js]
-
-
-def run_cli(args: Any) -> int:
-    """``visprim evaluate --online``: the early-recognition table, printed and written to
-    ``--out`` (``early_recognition.md`` / ``.json``, in a folder moved into place whole)."""
-    import sys
-
-    from visprim.cli import outputs
-
-    out = outputs.check_folder(args.out, force=args.force, inputs=args.data)
-    classes = [c.strip() for c in args.classes.split(",") if c.strip()] if args.classes else None
-    try:
-        results, notes = evaluate_early(
-            args.data,
-            labels=args.labels,
-            group_by=args.group,
-            classes=classes,
-            period=args.resample,
-            arm=args.arm,
-            jobs=args.jobs,
-        )
-    except ValueError as exc:
-        print(f"visprim evaluate: {exc}", file=sys.stderr)
-        return 2
-    if not results:
-        print("visprim evaluate: no benchmark to run; " + "; ".join(notes), file=sys.stderr)
-        return 2
-    print(to_markdown(results, notes), end="")
-    with outputs.atomic_folder(out, "evaluate") as tmp:
-        paths = write(results, notes, Path(tmp))
-    print("\nwritten: " + ", ".join(str(outputs.moved(p, tmp, out)) for p in paths))
-    return 0
