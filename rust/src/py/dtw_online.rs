@@ -12,6 +12,9 @@ use pyo3::prelude::*;
 use super::arrays::{check_dtype, f64_values, i64_values, ndarray, shape_str, F64Array};
 use crate::dtw_online;
 
+/// Open-end costs (f64) and the reference frames reached (i64), one per reference.
+type CostsAndPositions<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>);
+
 /// Open-end DTW of a growing query against fixed references, one row per reference.
 ///
 /// ``OnlineDtw(references, offsets)``: references ``(frames, dim)`` float64 one after
@@ -86,10 +89,7 @@ impl OnlineDtw {
     }
 
     /// ``(costs, positions)``: open-end cost per reference and the reference frame reached.
-    fn open_end<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<i64>>)> {
+    fn open_end<'py>(&self, py: Python<'py>) -> PyResult<CostsAndPositions<'py>> {
         let n = self.inner.n_references();
         let mut costs = vec![0.0; n];
         let mut at = vec![0usize; n];
