@@ -41,7 +41,7 @@ def safe_cell(value: Any) -> Any:
 
 
 class SafeWriter:
-    """:func:`csv.writer` on ``fh`` (``\n`` line ends) whose rows go through
+    r""":func:`csv.writer` on ``fh`` (``\n`` line ends) whose rows go through
     :func:`safe_cell`."""
 
     def __init__(self, fh: Any) -> None:

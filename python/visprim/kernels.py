@@ -124,8 +124,8 @@ def instruction_sets() -> dict[str, str]:
       largest input magnitude.
 
     Returns:
-        ``{kernel name: description}``, e.g. ``{"sosfiltfilt": "avx2+fma (16 signals in
-        lockstep)", ...}``.
+        ``{kernel name: description}``, e.g.
+        ``{"sosfiltfilt": "avx2+fma (16 signals in lockstep)", ...}``.
 
     Raises:
         ValueError: as :func:`instruction_set`.

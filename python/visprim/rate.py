@@ -31,7 +31,7 @@ segment is rebuilt by a description (:data:`FAMILIES`):
     the segment's own first m PCA coefficients (no primitive id).
 ``warp``
     the nearest primitive with its gain and a monotone time warp inside the segment,
-    ``u → u + w u (1 − u)``, |w| < 1, one number (:func:`warp_curves`), the primitive and
+    ``u → u + w u (1 − u)``, ``|w| < 1``, one number (:func:`warp_curves`), the primitive and
     warp chosen together among the nearest few primitives.
 ``keyframes``, ``dct``
     baselines on the same movements: each channel (the 4 arm angles, or the 6 bone-direction
