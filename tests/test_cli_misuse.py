@@ -60,3 +60,15 @@ def test_a_diverging_simulation_is_one_clear_line(tmp_path, capsys):
     assert len(err) == 1 and "diverged" in err[0] and "--dt" in err[0], err
     assert "internal error" not in err[0] and "a bug" not in err[0]
     assert not (tmp_path / "o").exists()
+
+
+def test_ctrl_c_while_a_local_cluster_starts_is_deferred():
+    import os
+    import signal
+
+    from visprim.scale import _interrupt_deferred
+
+    with _interrupt_deferred() as interrupted:
+        os.kill(os.getpid(), signal.SIGINT)  # recorded, not raised inside the block
+    assert interrupted == [signal.SIGINT]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
