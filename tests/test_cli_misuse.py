@@ -45,3 +45,30 @@ def test_motion_classifier_window_must_be_finite(movements, window):
     trials, labels = movements
     with pytest.raises(ValueError, match="window must be a positive finite multiple"):
         MotionClassifier(window=window).fit(trials, labels)
+
+
+def test_a_diverging_simulation_is_one_clear_line(tmp_path, capsys):
+    from visprim import PrimitiveModel
+    from visprim.markers_csv import write_marker_csv
+
+    trials = imitation_experiment(2, 4, seed=4)
+    PrimitiveModel(n_clusters=5, n_init=2).fit(trials[:-1]).save(tmp_path / "m.npz")
+    rec = write_marker_csv(tmp_path / "take.csv", trials[-1])
+    argv = ["imitate", str(tmp_path / "m.npz"), str(rec), "--out", str(tmp_path / "o")]
+    assert run([*argv, "--servo", "paper", "--dt", "0.002", "--no-video"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "diverged" in err[0] and "--dt" in err[0], err
+    assert "internal error" not in err[0] and "a bug" not in err[0]
+    assert not (tmp_path / "o").exists()
+
+
+def test_ctrl_c_while_a_local_cluster_starts_is_deferred():
+    import os
+    import signal
+
+    from visprim.scale import _interrupt_deferred
+
+    with _interrupt_deferred() as interrupted:
+        os.kill(os.getpid(), signal.SIGINT)  # recorded, not raised inside the block
+    assert interrupted == [signal.SIGINT]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

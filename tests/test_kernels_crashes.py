@@ -28,6 +28,9 @@ def run(f):
         print(type(e).__name__, str(e).replace("\\n", " "))
 """
 
+#: A small ragged DTW input (two sequences of two frames).
+DTW = "np.zeros((4, 2)), np.array([0, 2])"
+
 CASES = [
     # (id, expression, exception class, text the message must contain)
     (
@@ -88,6 +91,10 @@ CASES = [
     ("predict_n_threads_-1", "K.kmeans_predict(X, X[:2], n_threads=-1)", "ValueError", "n_threads"),
     ("covariance_n_threads_-1", "K.covariance(X, n_threads=-1)", "ValueError", "n_threads"),
     ("covariance_n_threads_2**63", "K.covariance(X, n_threads=2**63)", "ValueError", "n_threads"),
+    ("dtw_n_threads_-1", f"K.dtw_distances({DTW}, n_threads=-1)", "ValueError", "n_threads"),
+    ("dtw_n_threads_5000", f"K.dtw_distances({DTW}, n_threads=5000)", "ValueError", "n_threads"),
+    ("dtw_n_threads_2**31", f"K.dtw_distances({DTW}, n_threads=2**31)", "ValueError", "n_threads"),
+    ("dtw_n_threads_2**64", f"K.dtw_distances({DTW}, n_threads=2**64)", "ValueError", "n_threads"),
     ("eigh_k_-1", "K.eigh(np.eye(3), k=-1)", "ValueError", "k (leading eigenpairs"),
     ("eigh_k_2**70", "K.eigh(np.eye(3), k=2**70)", "ValueError", "k (leading eigenpairs"),
     (

@@ -21,8 +21,10 @@ coordinate axes farthest from the kept eigenvectors, orthonormalised (determinis
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -75,14 +77,14 @@ class PCABasis:
         x = _as_rows(vectors, self.dim, "vectors")
         e = np.ascontiguousarray(self.components(f))
         # X E - s̄ E: no centred copy of X (same result to rounding, ~1e-14 rad).
-        return x @ e - self.mean @ e
+        return one_thread_product(x, e) - self.mean @ e
 
     def reconstruct(self, projections: ArrayLike) -> NDArray[np.float64]:
         """``s = E_f p + s̄`` for each row of ``projections`` (N, f) → (N, d)."""
         p = np.asarray(projections, dtype=np.float64)
         single = p.ndim == 1
         p = np.atleast_2d(p)
-        out = p @ self.components(p.shape[1]).T + self.mean
+        out = one_thread_product(p, self.components(p.shape[1]).T) + self.mean
         return out[0] if single else out
 
     def dropped_variance(self, f: int) -> float:
@@ -97,6 +99,22 @@ class PCABasis:
         if total <= 0:
             return 1.0
         return 1.0 - self.dropped_variance(f) / total
+
+
+@functools.cache
+def _blas_controller() -> Any:
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
+
+
+def one_thread_product(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``a @ b`` on one BLAS thread. OpenBLAS's matrix product changes its summation order
+    with its thread count (results one ulp apart between ``OPENBLAS_NUM_THREADS=1`` and
+    ``2``), which would make a model's bits depend on the machine; the products here are
+    thin (f ≤ a few dozen columns), so one thread costs little."""
+    with _blas_controller().limit(limits=1, user_api="blas"):
+        return np.asarray(a @ b)
 
 
 def _as_rows(x: ArrayLike, d: int, name: str) -> NDArray[np.float64]:

@@ -41,10 +41,12 @@ the kernel's stopping rule holds. A lost worker's tasks are re-run by Dask from 
 
 from __future__ import annotations
 
+import contextlib
 import math
 import shutil
+import signal
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -371,7 +373,10 @@ def local_client(n_workers: int | None = None, *, threads_per_worker: int = 1) -
         # The statistical profiler feeds the dashboard (off here) and wakes every 10 ms.
         "distributed.worker.profile.enabled": False,
     }
-    with dask.config.set(settings):
+    # A Ctrl-C while the cluster starts would leave it half-made (and distributed prints a
+    # long traceback when it closes it at exit): the interruption waits until it has
+    # started, then closes it and is raised.
+    with dask.config.set(settings), _interrupt_deferred() as interrupted:
         cluster = LocalCluster(
             n_workers=n_workers,
             threads_per_worker=threads_per_worker,
@@ -379,7 +384,26 @@ def local_client(n_workers: int | None = None, *, threads_per_worker: int = 1) -
             dashboard_address=None,
             env={"RAYON_NUM_THREADS": str(threads_per_worker)},
         )
+    if interrupted:
+        cluster.close()
+        raise KeyboardInterrupt
     return Client(cluster)
+
+
+@contextlib.contextmanager
+def _interrupt_deferred() -> Iterator[list[int]]:
+    """Within the block, SIGINT is recorded in the yielded list instead of raised (main
+    thread only; elsewhere signals are left alone)."""
+    seen: list[int] = []
+    try:
+        previous = signal.signal(signal.SIGINT, lambda signum, frame: seen.append(signum))
+    except ValueError:  # not the main thread
+        yield seen
+        return
+    try:
+        yield seen
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _block_task(settings: Any, part: LazyCorpus) -> Block:

@@ -134,6 +134,9 @@ def describe(exc: BaseException) -> tuple[str, int]:
             "out: unreadable files are skipped unless --strict)",
             EXIT_ERROR,
         )
+    if any(c.__name__ == "SimulationDiverged" for c in type(exc).__mro__):
+        text = one_line(exc).removeprefix("play: ").removesuffix("; try a smaller time step")
+        return f"{text}; give a smaller --dt (such as 0.0001 with --servo paper)", EXIT_ERROR
     if isinstance(exc, MemoryError):
         return (
             f"out of memory ({one_line(exc)}); give fewer or shorter recordings, or a larger "

@@ -11,6 +11,7 @@ use numpy::{IntoPyArray, PyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
+use super::args::{n_threads_arg, Int};
 use super::arrays::{check_dtype, f64_values, i64_values, ndarray, shape_str, F64Array};
 use crate::dtw::{self, DtwOptions};
 
@@ -72,8 +73,9 @@ fn dtw_distances<'py>(
     reference_offsets: Option<&Bound<'py, PyAny>>,
     band: Option<f64>,
     normalize: bool,
-    n_threads: Option<usize>,
+    n_threads: Option<Int>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let n_threads = n_threads_arg(n_threads)?;
     let options = DtwOptions { band, normalize };
     let q = frames(queries, "queries")?;
     let qo = offsets(query_offsets, "query_offsets")?;
