@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 from visprim import PrimitiveModel
 from visprim.datasets import imitation_experiment
-from visprim.markers_csv import write_marker_csv
+from visprim.io.markers_csv import write_marker_csv
 from visprim.trial import Trial
 
 

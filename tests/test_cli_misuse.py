@@ -49,7 +49,7 @@ def test_motion_classifier_window_must_be_finite(movements, window):
 
 def test_a_diverging_simulation_is_one_clear_line(tmp_path, capsys):
     from visprim import PrimitiveModel
-    from visprim.markers_csv import write_marker_csv
+    from visprim.io.markers_csv import write_marker_csv
 
     trials = imitation_experiment(2, 4, seed=4)
     PrimitiveModel(n_clusters=5, n_init=2).fit(trials[:-1]).save(tmp_path / "m.npz")
