@@ -19,25 +19,15 @@ def run(args: argparse.Namespace) -> int:
     out = outputs.check_folder(args.out, force=args.force, inputs=args.data)
     if args.rate_only:
         return _run_rate(args, out, None)
-    classes = [c.strip() for c in args.classes.split(",") if c.strip()] if args.classes else None
-    try:
-        results, notes = evaluate(
-            args.data,
-            labels=args.labels,
-            group_by=args.group,
-            classes=classes,
-            classifier=MotionClassifier(method=args.method, band=args.band, step=args.step),
-            period=args.resample,
-            arm=args.arm,
-            reconstruction=args.reconstruction,
-            jobs=args.jobs,
-        )
-    except ValueError as exc:
-        print(f"visprim evaluate: {exc}", file=sys.stderr)
+    found = _benchmarks(
+        evaluate,
+        args,
+        classifier=MotionClassifier(method=args.method, band=args.band, step=args.step),
+        reconstruction=args.reconstruction,
+    )
+    if found is None:
         return 2
-    if not results:
-        print("visprim evaluate: no benchmark to run; " + "; ".join(notes), file=sys.stderr)
-        return 2
+    results, notes = found
     print(to_markdown(results, notes), end="")
     if args.rate:
         return _run_rate(args, out, lambda tmp: write_report(results, notes, tmp))
@@ -192,9 +182,24 @@ def _run_online(args: argparse.Namespace) -> int:
     from visprim.online.early import evaluate_early, to_markdown, write
 
     out = outputs.check_folder(args.out, force=args.force, inputs=args.data)
+    found = _benchmarks(evaluate_early, args)
+    if found is None:
+        return 2
+    results, notes = found
+    print(to_markdown(results, notes), end="")
+    with outputs.atomic_folder(out, "evaluate") as tmp:
+        paths = write(results, notes, Path(tmp))
+    print("\nwritten: " + ", ".join(str(outputs.moved(p, tmp, out)) for p in paths))
+    return 0
+
+
+def _benchmarks(run: Any, args: argparse.Namespace, **extra: Any) -> tuple[Any, Any] | None:
+    """``(results, notes)`` of ``run`` (:func:`visprim.evaluate.evaluate` or
+    :func:`visprim.online.early.evaluate_early`) on the benchmarks the options name, or None
+    after a one-line message (a bad input, or no benchmark to run)."""
     classes = [c.strip() for c in args.classes.split(",") if c.strip()] if args.classes else None
     try:
-        results, notes = evaluate_early(
+        results, notes = run(
             args.data,
             labels=args.labels,
             group_by=args.group,
@@ -202,15 +207,12 @@ def _run_online(args: argparse.Namespace) -> int:
             period=args.resample,
             arm=args.arm,
             jobs=args.jobs,
+            **extra,
         )
     except ValueError as exc:
         print(f"visprim evaluate: {exc}", file=sys.stderr)
-        return 2
+        return None
     if not results:
         print("visprim evaluate: no benchmark to run; " + "; ".join(notes), file=sys.stderr)
-        return 2
-    print(to_markdown(results, notes), end="")
-    with outputs.atomic_folder(out, "evaluate") as tmp:
-        paths = write(results, notes, Path(tmp))
-    print("\nwritten: " + ", ".join(str(outputs.moved(p, tmp, out)) for p in paths))
-    return 0
+        return None
+    return results, notes
