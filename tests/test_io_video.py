@@ -94,8 +94,8 @@ def test_no_person_and_a_jumping_person(clip):
         read_video_pieces(
             clip, estimator=_Scripted("jump"), max_frames=20, cache=False, min_duration=0.1
         )
-    with pytest.raises(ValueError, match="only person=0 exists"):
-        read_video_pieces(clip, person=1)
+    with pytest.raises(ValueError, match=r"cam01\.mp4: person=1, but 1 person was found"):
+        read_video_pieces(clip, estimator=_Scripted("still"), person=1, max_frames=20, cache=False)
 
 
 @pytest.mark.skipif(not HAS_CV2, reason=NO_EXTRA)

@@ -15,12 +15,13 @@
 * Frames without a person, and landmarks below ``min_confidence`` visibility, are gaps with
   the C3D policy (:mod:`visprim.io.gaps`): short ones filled, long ones split or refused.
 
-People. MediaPipe's pose pipeline follows one person: the most prominent one (highest
-detection score) when tracking starts, kept from frame to frame. A video where nobody is
-found raises :class:`~visprim.io.errors.ReadError` ("no person found"); when the tracked
-body jumps across the image between consecutive frames (another person taken over), a
-warning names the frame. ``person=`` selects a person for estimators that report several;
-with a single-person estimator only ``person=0`` (the default) exists.
+People. The estimator follows one person. With several people in view where someone first
+appears, the largest (by the bounding box of their landmarks) is person 0, the next largest
+person 1, and so on; ``person=`` chooses one, and a warning names the file, the number of
+people and the one followed (:mod:`visprim.io.video_pose` explains how people are found and
+followed). A video where nobody is found raises :class:`~visprim.io.errors.ReadError` ("no
+person found"); when the followed body jumps across the image between consecutive frames
+(another person taken over), a warning names the frame.
 """
 
 from __future__ import annotations
@@ -40,15 +41,6 @@ from visprim.trial import Trial
 #: A jump of the hips' image position by more than this fraction of the image diagonal
 #: between consecutive frames is reported as a possible change of person.
 PERSON_JUMP = 0.15
-
-
-def check_person(path: Path, person: int | None) -> None:
-    """Single-person estimators: only person 0 exists."""
-    if person not in (None, 0):
-        raise ValueError(
-            f"person={person!r}: the pose estimator follows one person per video "
-            "(the most prominent when tracking starts); only person=0 exists"
-        )
 
 
 def person_jumps(poses: VideoPoses, hips: tuple[int, int] = (23, 24)) -> list[int]:
@@ -85,19 +77,28 @@ def read_video_pieces(
     path : video file
     arm, mirror, max_gap, on_gap, gap_method, min_duration : as :func:`visprim.io.read_pieces`
     estimator : a :class:`~visprim.io.video_pose.PoseEstimator` (default MediaPipe)
-    person : see the module docstring
+    person : which person to follow when there are several (module docstring; None: 0,
+        the largest)
     min_confidence : landmarks with a lower visibility are missing in that frame
     max_frames : only the first frames
     cache : use the pose cache
     """
     p = Path(path)
-    check_person(p, person)
-    poses = video_poses(p, estimator, max_frames=max_frames, cache=cache)
+    poses = video_poses(p, estimator, max_frames=max_frames, cache=cache, person=person)
     n = poses.times.shape[0]
     found = int(poses.found.sum())
     if found == 0:
         raise ReadError(p, f"no person found in any of the {n} frames")
     layout = str(poses.meta["layout"])
+    people = int(poses.meta.get("people", 0))
+    if people > 1:
+        at = poses.times[int(poses.meta["people_frame"])]
+        warnings.warn(
+            f"{p}: {people} people in view at {at:.2f} s; following person "
+            f"{poses.meta['person']} ({'the largest' if poses.meta['person'] == 0 else 'person='}"
+            "; people are numbered largest first, choose another with person=)",
+            stacklevel=2,
+        )
     if layout == "blazepose33":
         for i in person_jumps(poses):
             warnings.warn(
@@ -113,6 +114,9 @@ def read_video_pieces(
         "video_size": poses.meta["size"],
         "frames": n,
         "person_found": found / n,
+        "person": poses.meta.get("person", 0),
+        "people": people,
+        "pose_passes": poses.meta.get("passes"),
         "pose_cache": poses.meta.get("cache"),
     }
     try:
