@@ -32,15 +32,18 @@ the original pixels exactly); it is off by default (measured: MediaPipe's cost h
 depends on the frame size; ``benches/bench_video.py``).
 
 Several people. MediaPipe's pose pipeline follows one person. :func:`video_poses` asks the
-estimator for everybody (``people``) in the first frame where it finds someone: MediaPipe
-finds one person, that person's box is blanked out, and it looks again, up to
-:data:`MAX_PEOPLE`. People are numbered by the area of their landmarks' bounding box in that
-frame, largest first (ties: leftmost first); ``person=None`` or ``0`` is the largest.
-When there are several people (or ``person=`` asks for another one), each frame is blanked
-outside the followed person's box of the previous frame, grown by :data:`REGION_MARGIN`
-on each side, so the tracker sees that person only; when the person is lost the region grows
-by :data:`REGION_GROWTH` per frame around where they were last seen. People who enter
-later are not counted (see :func:`visprim.io.video.person_jumps`).
+estimator for everybody (``people``) in the first frame where it finds someone (and, until
+then, every :data:`DISCOVER_EVERY` frames, so that people too small for the detector on the
+whole frame are found too): MediaPipe finds one person, that person's box is blanked out, and
+it looks again, on the whole frame and then in overlapping tiles, up to :data:`MAX_PEOPLE`.
+People are numbered by the area of their landmarks' bounding box in that frame, largest
+first (ties: leftmost first); ``person=None`` or ``0`` is the largest. When there are
+several people, ``person=`` asks for another one, or the person was found only in a tile,
+the estimator sees a square window around the followed person only (:data:`WINDOW_SCALE`
+times their box's larger side, fixed in size, centred each frame on their box of the
+previous frame), so it follows that person and no one else; a lost person is looked for in
+the window where they were last seen. People who enter later are not counted (see
+:func:`visprim.io.video.person_jumps`).
 
 Cache: ``$VISPRIM_CACHE_DIR`` if set, else ``$XDG_CACHE_HOME/visprim``, else
 ``~/.cache/visprim``; one ``pose/<key>.npz`` per video and settings, written atomically
@@ -77,10 +80,10 @@ MAX_PEOPLE = 6
 #: A found person's box is blanked out this much larger (fraction of its size, each side)
 #: before looking for the next one.
 PEOPLE_MASK_MARGIN = 0.15
-#: The followed person's search region: the previous box grown by this fraction each side.
-REGION_MARGIN = 0.3
-#: ... and by this factor per frame while the person is lost.
-REGION_GROWTH = 1.3
+#: The followed person's window: a square this many times their box's larger side.
+WINDOW_SCALE = 2.0
+#: Until someone is found, people are looked for every this many frames.
+DISCOVER_EVERY = 30
 #: A "person" whose box covers less than this fraction of the frame is ignored.
 MIN_PERSON_AREA = 0.002
 
@@ -170,17 +173,6 @@ def order_people(poses: list[FramePose], size: tuple[int, int]) -> list[FramePos
     return [poses[i] for i in order]
 
 
-def blank_outside(rgb: NDArray[np.uint8], box: Box) -> None:
-    """Set the pixels of ``rgb`` outside ``box`` to black, in place."""
-    h, w = rgb.shape[:2]
-    x0, y0 = max(0, int(box[0])), max(0, int(box[1]))
-    x1, y1 = min(w, int(np.ceil(box[2]))), min(h, int(np.ceil(box[3])))
-    rgb[:y0] = 0
-    rgb[y1:] = 0
-    rgb[:, :x0] = 0
-    rgb[:, x1:] = 0
-
-
 class MediaPipePose:
     """MediaPipe BlazePose (33 landmarks), full model, video (tracking) mode.
 
@@ -260,7 +252,9 @@ class MediaPipePose:
 
     def people(self, rgb: NDArray[np.uint8]) -> list[FramePose]:
         """Everybody in one still frame (unordered): find one person, blank out their box
-        (grown by :data:`PEOPLE_MASK_MARGIN`), look again; at most :data:`MAX_PEOPLE`."""
+        (grown by :data:`PEOPLE_MASK_MARGIN`), look again; then the same in each of 3 × 3
+        overlapping tiles of half the frame's size (the detector sees the whole frame at
+        224 × 224 pixels, too coarse for small people); at most :data:`MAX_PEOPLE`."""
         if self._still is None:
             opts = {**self._options, "static_image_mode": True, "smooth_landmarks": False}
             self._still = self._mp.solutions.pose.Pose(**opts)
@@ -268,17 +262,26 @@ class MediaPipePose:
         img = rgb.copy()
         found: list[FramePose] = []
         boxes: list[Box] = []
-        for _ in range(MAX_PEOPLE):
-            pose = self._frame_pose(self._still.process(img), w, h)
-            if pose is None:
-                break
-            box = grow_box(pose_box(pose, (w, h)), PEOPLE_MASK_MARGIN, (w, h))
-            if box_area(box) < MIN_PERSON_AREA * w * h or any(box_iou(box, b) > 0.5 for b in boxes):
-                break  # a speck, or the same person again through the blanked box
-            found.append(pose)
-            boxes.append(box)
-            x0, y0, x1, y1 = (int(v) for v in box)
-            img[y0 : y1 + 1, x0 : x1 + 1] = 0
+        tw, th = w // 2, h // 2
+        tiles = [(0, 0, w, h)] + [
+            (x, y, tw, th) for y in (0, h // 4, h - th) for x in (0, w // 4, w - tw)
+        ]
+        for x, y, cw, ch in tiles:
+            while len(found) < MAX_PEOPLE:
+                crop = np.ascontiguousarray(img[y : y + ch, x : x + cw])
+                pose = self._frame_pose(self._still.process(crop), cw, ch)
+                if pose is None:
+                    break
+                pose.image += [x, y]
+                box = grow_box(pose_box(pose, (w, h)), PEOPLE_MASK_MARGIN, (w, h))
+                if box_area(box) < MIN_PERSON_AREA * w * h or any(
+                    box_iou(box, b) > 0.3 for b in boxes
+                ):
+                    break  # a speck, or the same person again through the blanked box
+                found.append(pose)
+                boxes.append(box)
+                x0, y0, x1, y1 = (int(v) for v in box)
+                img[y0 : y1 + 1, x0 : x1 + 1] = 0
         return found
 
     def close(self) -> None:
@@ -473,7 +476,7 @@ class _Segment:
         #: the video's pixels, in the order of the rule); None until then.
         self.people: tuple[int, list[Box]] | None = None
         self._region: Box | None = None  # followed person, in the decoded frame's pixels
-        self._lost = 0
+        self._window: tuple[int, int] | None = None  # their window's size (pixels)
         estimator.reset()
 
     def run(self, frames: int | None) -> None:
@@ -489,27 +492,47 @@ class _Segment:
 
     def _step(self, rgb: NDArray[np.uint8]) -> FramePose | None:
         size = (rgb.shape[1], rgb.shape[0])
-        if self._region is not None:
-            reach = REGION_MARGIN * REGION_GROWTH**self._lost
-            blank_outside(rgb, grow_box(self._region, reach, size))
+        if self._window is not None:
+            return self._follow(rgb, size)
         pose = self.estimator.estimate(rgb)
-        if pose is not None and self.people is None:
+        if self.people is None and (pose is not None or len(self.poses) % DISCOVER_EVERY == 0):
             pose = self._choose(rgb, pose, size)
-        if self._region is not None:
-            if pose is None:
-                self._lost += 1
-            else:
-                self._region, self._lost = pose_box(pose, size), 0
+            if self._window is not None:
+                return self._follow(rgb, size)
+        return self._to_video(pose, (0, 0))
+
+    def _to_video(self, pose: FramePose | None, at: tuple[int, int]) -> FramePose | None:
+        """A pose in the pixels of a crop at ``at`` of the decoded frame → video pixels."""
         if pose is None:
             return None
         sx, sy = self.decoder.scale
-        return FramePose(pose.world, pose.image * [sx, sy], pose.confidence)
+        return FramePose(pose.world, (pose.image + at) * [sx, sy], pose.confidence)
 
-    def _choose(self, rgb: NDArray[np.uint8], pose: FramePose, size: tuple[int, int]) -> FramePose:
-        """The first frame with someone: count people, start following the chosen one."""
+    def _follow(self, rgb: NDArray[np.uint8], size: tuple[int, int]) -> FramePose | None:
+        """The followed person: the estimator sees a window around them only."""
+        assert self._window is not None and self._region is not None
+        cw, ch = self._window
+        cx, cy = (self._region[0] + self._region[2]) / 2, (self._region[1] + self._region[3]) / 2
+        x0 = int(np.clip(round(cx - cw / 2), 0, size[0] - cw))
+        y0 = int(np.clip(round(cy - ch / 2), 0, size[1] - ch))
+        crop = np.ascontiguousarray(rgb[y0 : y0 + ch, x0 : x0 + cw])
+        pose = self.estimator.estimate(crop)
+        if pose is not None:
+            box = pose_box(pose, (cw, ch))
+            self._region = (box[0] + x0, box[1] + y0, box[2] + x0, box[3] + y0)
+        return self._to_video(pose, (x0, y0))
+
+    def _choose(
+        self, rgb: NDArray[np.uint8], pose: FramePose | None, size: tuple[int, int]
+    ) -> FramePose | None:
+        """Count the people (the first frame with someone, or every :data:`DISCOVER_EVERY`
+        frames until then) and start following the chosen one."""
         finder = getattr(self.estimator, "people", None)
-        found = order_people(finder(rgb), size) if finder is not None else [pose]
-        found = found or [pose]
+        found = order_people(finder(rgb), size) if finder is not None else []
+        if not found:
+            if pose is None:
+                return None  # nobody yet: look again later
+            found = [pose]
         sx, sy = self.decoder.scale
         boxes = [pose_box(q, size) for q in found]
         self.people = (
@@ -523,12 +546,14 @@ class _Segment:
                 f"{'person was' if len(found) == 1 else 'people were'} found where someone "
                 "first appears (people are numbered from 0, largest first)"
             )
-        if len(found) == 1:
-            return pose  # one person: MediaPipe's own tracking, nothing blanked
+        if len(found) == 1 and pose is not None:
+            return pose  # one person, seen by the tracker: MediaPipe's own tracking
         self._region = boxes[chosen]
-        blank_outside(rgb, grow_box(self._region, REGION_MARGIN, size))
+        bw, bh = self._region[2] - self._region[0], self._region[3] - self._region[1]
+        side = WINDOW_SCALE * max(bw, bh)
+        self._window = (int(min(size[0], max(side, 64))), int(min(size[1], max(side, 64))))
         self.estimator.reset()  # start again on the chosen person only
-        return self.estimator.estimate(rgb) or found[chosen]
+        return None
 
 
 def _ticks(jobs: list[Any], q: queue.Queue[int]) -> Any:
