@@ -62,6 +62,7 @@ def read_video_pieces(
     mirror: bool = False,
     estimator: PoseEstimator | None = None,
     person: int | None = None,
+    workers: int | None = None,
     min_confidence: float = 0.5,
     max_frames: int | None = None,
     cache: bool = True,
@@ -79,12 +80,16 @@ def read_video_pieces(
     estimator : a :class:`~visprim.io.video_pose.PoseEstimator` (default MediaPipe)
     person : which person to follow when there are several (module docstring; None: 0,
         the largest)
+    workers : 2: the two halves of the video at once
+        (:func:`~visprim.io.video_pose.video_poses`)
     min_confidence : landmarks with a lower visibility are missing in that frame
     max_frames : only the first frames
     cache : use the pose cache
     """
     p = Path(path)
-    poses = video_poses(p, estimator, max_frames=max_frames, cache=cache, person=person)
+    poses = video_poses(
+        p, estimator, max_frames=max_frames, cache=cache, person=person, workers=workers
+    )
     n = poses.times.shape[0]
     found = int(poses.found.sum())
     if found == 0:

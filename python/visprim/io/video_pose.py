@@ -84,8 +84,10 @@ PEOPLE_MASK_MARGIN = 0.15
 WINDOW_SCALE = 2.0
 #: Until someone is found, people are looked for every this many frames.
 DISCOVER_EVERY = 30
-#: A "person" whose box covers less than this fraction of the frame is ignored.
+#: A "person" whose box covers less than this fraction of the frame is ignored ...
 MIN_PERSON_AREA = 0.002
+#: ... and so is one whose landmarks' mean visibility is lower than this.
+MIN_PERSON_VISIBILITY = 0.7
 
 Box = tuple[float, float, float, float]  # x0, y0, x1, y1 pixels
 
@@ -274,10 +276,12 @@ class MediaPipePose:
                     break
                 pose.image += [x, y]
                 box = grow_box(pose_box(pose, (w, h)), PEOPLE_MASK_MARGIN, (w, h))
-                if box_area(box) < MIN_PERSON_AREA * w * h or any(
-                    box_iou(box, b) > 0.3 for b in boxes
+                if (
+                    box_area(box) < MIN_PERSON_AREA * w * h
+                    or float(pose.confidence.mean()) < MIN_PERSON_VISIBILITY
+                    or any(box_iou(box, b) > 0.3 for b in boxes)
                 ):
-                    break  # a speck, or the same person again through the blanked box
+                    break  # a speck, a shape, or the same person again through the blank
                 found.append(pose)
                 boxes.append(box)
                 x0, y0, x1, y1 = (int(v) for v in box)
@@ -477,11 +481,15 @@ class _Segment:
         self.people: tuple[int, list[Box]] | None = None
         self._region: Box | None = None  # followed person, in the decoded frame's pixels
         self._window: tuple[int, int] | None = None  # their window's size (pixels)
+        #: Set to stop :meth:`run`; ``partner`` (the other half) is stopped when this one
+        #: finds several people (the video is then read in one pass).
+        self.cancel = threading.Event()
+        self.partner: _Segment | None = None
         estimator.reset()
 
     def run(self, frames: int | None) -> None:
         """Go on until ``frames`` frames have been read in all (None: to the end)."""
-        while frames is None or len(self.stamps) < frames:
+        while (frames is None or len(self.stamps) < frames) and not self.cancel.is_set():
             item = self.decoder.next()
             if item is None:
                 return
@@ -548,6 +556,8 @@ class _Segment:
             )
         if len(found) == 1 and pose is not None:
             return pose  # one person, seen by the tracker: MediaPipe's own tracking
+        if len(found) > 1 and self.partner is not None:
+            self.partner.cancel.set()
         self._region = boxes[chosen]
         bw, bh = self._region[2] - self._region[0], self._region[3] - self._region[1]
         side = WINDOW_SCALE * max(bw, bh)
@@ -644,6 +654,7 @@ def video_poses(
             if fresh is not None and want == 2 and total is not None and total >= SPLIT_MIN_FRAMES:
                 half = (total + OVERLAP) // 2
                 second = _Segment(p, fresh(), half - OVERLAP, None, lambda: done.put(1))
+                first.partner = second
                 jobs = [
                     pool.submit(first.run, half),
                     pool.submit(second.run, None if end is None else end - half + OVERLAP),
@@ -722,7 +733,7 @@ def _join(first: _Segment, second: _Segment, job: Any) -> str | None:
         job.result()
     except Exception as exc:  # the first half goes on alone
         return f"second half failed: {exc}"
-    if first.people is not None and len(first.people[1]) > 1:
+    if second.cancel.is_set() or (first.people is not None and len(first.people[1]) > 1):
         return "several people"
     if second.people is not None and len(second.people[1]) > 1:
         return "several people in the second half"
