@@ -86,8 +86,10 @@ WINDOW_SCALE = 2.0
 DISCOVER_EVERY = 30
 #: A "person" whose box covers less than this fraction of the frame is ignored ...
 MIN_PERSON_AREA = 0.002
-#: ... and so is one whose landmarks' mean visibility is lower than this.
+#: ... and so is one whose landmarks' mean visibility is lower than this ...
 MIN_PERSON_VISIBILITY = 0.7
+#: ... or whose box's larger side is less than this fraction of the largest person's.
+MIN_PERSON_SIDE = 0.25
 
 Box = tuple[float, float, float, float]  # x0, y0, x1, y1 pixels
 
@@ -256,7 +258,10 @@ class MediaPipePose:
         """Everybody in one still frame (unordered): find one person, blank out their box
         (grown by :data:`PEOPLE_MASK_MARGIN`), look again; then the same in each of 3 × 3
         overlapping tiles of half the frame's size (the detector sees the whole frame at
-        224 × 224 pixels, too coarse for small people); at most :data:`MAX_PEOPLE`."""
+        224 × 224 pixels, too coarse for small people); at most :data:`MAX_PEOPLE`. Not
+        counted: boxes under :data:`MIN_PERSON_AREA` of the frame, a mean visibility under
+        :data:`MIN_PERSON_VISIBILITY`, a larger side under :data:`MIN_PERSON_SIDE` of the
+        largest person's (shapes that look like a person, people far behind)."""
         if self._still is None:
             opts = {**self._options, "static_image_mode": True, "smooth_landmarks": False}
             self._still = self._mp.solutions.pose.Pose(**opts)
@@ -286,7 +291,10 @@ class MediaPipePose:
                 boxes.append(box)
                 x0, y0, x1, y1 = (int(v) for v in box)
                 img[y0 : y1 + 1, x0 : x1 + 1] = 0
-        return found
+        sides = [max(b[2] - b[0], b[3] - b[1]) for b in boxes]
+        return [
+            q for q, side in zip(found, sides, strict=True) if side >= MIN_PERSON_SIDE * max(sides)
+        ]
 
     def close(self) -> None:
         for graph in (self._pose, self._still):
