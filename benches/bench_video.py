@@ -10,8 +10,8 @@ may be shared: the load says how much of it the bench had).
 * Where the time goes: CPU milliseconds per frame of each stage, one pass, one thread each
   (decoding, colour conversion of the full frame, downsizing, MediaPipe).
 * Throughput of ``visprim.io.video.read_video_pieces`` (both arms, pose cache off),
-  frames/s: median and range over ``--runs`` runs, for one pass (``workers=1``), the two
-  halves at once (``workers=2``, the default on two or more cores), and downsized frames.
+  frames/s: median and range over ``--runs`` runs, for one pass (``workers=1``, the
+  default), the two halves at once (``workers=2``), and downsized frames.
 * Accuracy of each against one pass at full resolution: landmark distance in the video's
   pixels (arm and hip landmarks, frames from the split on for ``workers=2``; median, 95th
   percentile, maximum), and of the metric world landmarks (mm).
@@ -37,8 +37,8 @@ HERE = Path(__file__).resolve().parent
 ARM_HIPS = [11, 12, 13, 14, 15, 16, 23, 24]
 #: (label, workers, max_side)
 CONFIGS = [
-    ("one pass, full resolution", 1, None),
-    ("two halves at once, full resolution (default)", 2, None),
+    ("one pass, full resolution (default)", 1, None),
+    ("two halves at once, full resolution", 2, None),
     ("two halves at once, frames downsized to 960 px", 2, 960),
     ("two halves at once, frames downsized to 640 px", 2, 640),
 ]

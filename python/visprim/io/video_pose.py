@@ -21,15 +21,16 @@ This module needs the optional extra ``visprim[video]`` (MediaPipe and OpenCV); 
 
 Speed. Decoding runs in a background thread a few frames ahead of the estimator (OpenCV and
 MediaPipe both work outside Python's GIL), into one reused full-size buffer, converted to
-RGB once. With ``workers=2`` (the default on a machine with two or more cores) and an
-estimator that has ``fresh()``, the two halves of the video run at once, each with its own
-decoder and estimator. The second half starts :data:`OVERLAP` frames early so that the
-tracker and MediaPipe's landmark smoothing have settled at the boundary; those frames are
-dropped, and their timestamps must equal the first half's (else the seek was not
-frame-exact, and the rest is read in one pass). ``max_side`` of :class:`MediaPipePose`
+RGB once. With ``workers=2`` and an estimator that has ``fresh()``, the two halves of the
+video run at once, each with its own decoder and estimator. The second half starts
+:data:`OVERLAP` frames early (the tracker's first detection); those frames are dropped, and
+their timestamps must equal the first half's (else the seek was not frame-exact, and the
+rest is read in one pass). It is not the default: MediaPipe's landmarks depend on its
+tracking history, so the second half's differ from one pass's, in a few frames by much more
+than the jitter (``benches/bench_video.py``). ``max_side`` of :class:`MediaPipePose`
 downsizes larger frames before the estimator (landmarks are normalised, so they map back to
 the original pixels exactly); it is off by default (measured: MediaPipe's cost hardly
-depends on the frame size; ``benches/bench_video.py``).
+depends on the frame size, and the landmarks move).
 
 Several people. MediaPipe's pose pipeline follows one person. :func:`video_poses` asks the
 estimator for everybody (``people``) in the first frame where it finds someone (and, until
@@ -601,8 +602,8 @@ def video_poses(
     cache : read and write the pose cache (see the module docstring)
     person : which person to follow when there are several (module docstring; None: the
         largest, person 0)
-    workers : 2 runs the two halves of the video at once (estimators with ``fresh()``);
-        None: 2 when the machine has two or more cores, else 1
+    workers : 2 runs the two halves of the video at once (estimators with ``fresh()``; see
+        the module docstring); None or 1: one pass
 
     Raises
     ------
@@ -632,7 +633,7 @@ def video_poses(
             estimator = MediaPipePose()
         except ImportError as exc:
             raise missing_extra(p, exc) from None
-    want = (2 if (os.cpu_count() or 1) >= 2 else 1) if workers is None else int(workers)
+    want = 1 if workers is None else int(workers)
     fresh = getattr(estimator, "fresh", None)
     if fresh is None or person not in (None, 0):
         want = 1  # another person than the largest: one pass that follows them
