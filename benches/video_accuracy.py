@@ -19,7 +19,8 @@ set, load average; the machine is shared):
    :func:`visprim.io.assemble.torso_frame`, what the trial and IK use): MediaPipe's world
    landmarks are hip-centred and camera-oriented, so only directions relative to the torso
    are comparable without a camera model. A second column set rotates the camera-oriented
-   directions into the world with the camera's extrinsics instead (absolute directions).
+   directions into the world with the camera's extrinsics instead (absolute directions),
+   with the torso frame's own error (rotation angle, RMS).
    Frames: those where the view's keypoints are confident (≥ 0.5) and the reference exists.
    Baseline beside them: a constant pose, each bone along the reference's own clip-mean
    direction (no per-frame information; optimistic, since it uses the reference).
@@ -108,6 +109,12 @@ def _angle(a: Array, b: Array) -> Array:
 def _rms(x: Array) -> float:
     x = x[np.isfinite(x)]
     return float(np.sqrt(np.mean(np.square(x)))) if x.size else float("nan")
+
+
+def rotation_angle(a: Array, b: Array) -> Array:
+    """Angle (deg) of the rotation between frames a and b, (T, 3, 3) each."""
+    tr = np.einsum("tij,tij->t", a, b)
+    return np.rad2deg(np.arccos(np.clip((tr - 1) / 2, -1.0, 1.0)))
 
 
 def body_frame(points: Array) -> Array:
@@ -298,9 +305,9 @@ def report(folder: Path) -> str:
         )
         print(
             "| view | arm | frames | upper arm, body (°) | forearm, body (°) | elbow flexion (°) |"
-            " upper arm, world (°) | forearm, world (°) |"
+            " upper arm, world (°) | forearm, world (°) | torso, world (°) |"
         )
-        print("|---|---|---|---|---|---|---|---|")
+        print("|---|---|---|---|---|---|---|---|---|")
         # Baseline: no per-frame information, the reference's own clip-mean directions.
         const_b = {
             k: np.broadcast_to(np.nanmean(_unit(x[ref_ok]), axis=0), x.shape)
@@ -316,7 +323,7 @@ def report(folder: Path) -> str:
                 f"| baseline: constant (reference's clip mean) | {side} | {ref_ok.sum()} | "
                 f"{eb[f'{side}_upper']:.1f} | {eb[f'{side}_fore']:.1f} | "
                 f"{eb[f'{side}_flex']:.1f} | "
-                f"{ew[f'{side}_upper']:.1f} | {ew[f'{side}_fore']:.1f} |"
+                f"{ew[f'{side}_upper']:.1f} | {ew[f'{side}_fore']:.1f} | — |"
             )
         monos = []
         for v, q, cam in zip(views, poses, cameras, strict=True):
@@ -326,11 +333,14 @@ def report(folder: Path) -> str:
             eb = errors(bones(pts, body_frame(pts)), ref_body, valid)
             world = {k: x @ cam.R for k, x in bones(pts, None).items()}  # R^T x, row-wise
             ew = errors(world, ref_world, valid)
+            torso = _rms(
+                rotation_angle(np.einsum("ji,tjk->tik", cam.R, body_frame(pts)), ref_frame)[valid]
+            )
             for side in ARMS:
                 print(
                     f"| {v.stem} | {side} | {valid.sum()} | {eb[f'{side}_upper']:.1f} | "
                     f"{eb[f'{side}_fore']:.1f} | {eb[f'{side}_flex']:.1f} | "
-                    f"{ew[f'{side}_upper']:.1f} | {ew[f'{side}_fore']:.1f} |"
+                    f"{ew[f'{side}_upper']:.1f} | {ew[f'{side}_fore']:.1f} | {torso:.1f} |"
                 )
 
         print(

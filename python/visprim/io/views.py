@@ -280,7 +280,8 @@ def triangulate_keypoints(
         points[still] = np.nan
     used = weights > 0
     reproj = _reproject(cameras, points, pixels)
-    reproj = np.where(used & np.isfinite(points).all(axis=-1)[..., None], reproj, np.nan)
+    finite: NDArray[np.bool_] = np.asarray(np.isfinite(points).all(axis=-1))
+    reproj = np.where(used & finite[..., None], reproj, np.nan)
     return Triangulation(
         points=points,
         reprojection=reproj,
