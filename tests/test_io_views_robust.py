@@ -247,3 +247,8 @@ def test_keypoint_lowpass_keeps_slow_motion_and_removes_jitter():
     truth = truth[:1].repeat(240, axis=0) + slow[:, None, None] * 0.05
     (tr,) = trial_pieces_from_keypoints(truth, "blazepose33", times=t, lowpass_hz=4.0)
     assert tr.meta["lowpass_hz"] == 4.0
+
+
+def test_many_views_try_single_view_exchanges():
+    combos = _swap_combos(10)
+    assert combos.shape == (11, 10) and (combos.sum(axis=1) == [0] + [1] * 10).all()

@@ -152,10 +152,17 @@ def _reproject(
     )
 
 
+#: Views up to which every exchange hypothesis is tried (2^(V−1) of them).
+MAX_EXHAUSTIVE_VIEWS = 8
+
+
 def _swap_combos(v: int) -> NDArray[np.bool_]:
     """Which views to exchange, one row per hypothesis (C, V), fewest exchanges first. A
     hypothesis and its complement give the same points with the labels exchanged, so only
-    one of each is kept: fewer than V/2 exchanges, or exactly V/2 with view 0 kept."""
+    one of each is kept: fewer than V/2 exchanges, or exactly V/2 with view 0 kept. Above
+    :data:`MAX_EXHAUSTIVE_VIEWS` views, only single-view exchanges are tried."""
+    if v > MAX_EXHAUSTIVE_VIEWS:
+        return np.vstack([np.zeros((1, v), dtype=bool), np.eye(v, dtype=bool)])
     rows = []
     for code in range(2**v):
         row = [(code >> i) & 1 == 1 for i in range(v)]
