@@ -220,7 +220,12 @@ def open_source(args: argparse.Namespace, model: Any) -> tuple[Any, str]:
             resolve_timeout=args.lsl_timeout,
             idle=args.idle,
         )
-        source.open()
+        try:
+            source.open()
+        except ImportError as exc:
+            if exc.name != "mne_lsl":
+                raise
+            raise common.CLIError(f"{args.source}: {exc}") from None
         return source, f"Lab Streaming Layer stream {name!r}"
     trial = read_source(args, model)
     src = RecordingSource(trial, chunk=args.chunk, fast=args.fast)

@@ -284,20 +284,23 @@ def publish(
     fast: bool = False,
     chunk: int = 1,
     wait_for_consumer: float | None = 10.0,
+    settle: float = 1.0,
     linger: float = 0.5,
 ) -> int:
     """Push ``trial`` to a new LSL outlet named ``name`` (``float64`` channels, the layout of
     the module docstring), ``chunk`` frames at a time on the recording's clock (``fast``: as
     fast as the consumer reads), timestamped ``now + (times - times[0])``. Waits up to
-    ``wait_for_consumer`` seconds for an inlet first and ``linger`` seconds after the last
-    sample; returns the number of frames pushed."""
+    ``wait_for_consumer`` seconds for an inlet, then ``settle`` seconds (liblsl reports the
+    consumer before its feed is open, and samples pushed meanwhile are lost), and
+    ``linger`` seconds after the last sample; returns the number of frames pushed."""
     lsl = _lsl()
     x = _samples(trial)
     rate = 1.0 / trial.frame_period if trial.n_frames > 1 and trial.frame_period > 0 else 0.0
     info = lsl.StreamInfo(name, STREAM_TYPE, int(x.shape[1]), float(rate), "float64", name)
     outlet = lsl.StreamOutlet(info, chunk_size=1, max_buffered=360)
     if wait_for_consumer is not None:
-        outlet.wait_for_consumers(timeout=wait_for_consumer)
+        if outlet.wait_for_consumers(timeout=wait_for_consumer):
+            time.sleep(settle)
     t = trial.times - trial.times[0]
     base = lsl.local_clock()
     wall = time.perf_counter()
