@@ -58,8 +58,8 @@ def _stop_on_signals() -> Iterator[None]:
     try:
         yield
     finally:
-        for sig, h in previous.items():
-            signal.signal(sig, h)
+        for signum, h in previous.items():
+            signal.signal(signum, h)
 
 
 class EventLog:
@@ -172,7 +172,9 @@ def read_source(args: argparse.Namespace, model: Any) -> Any:
                 f"SOURCE {args.source}: live cameras are not supported; record a video file "
                 "and watch it, or stream poses over Lab Streaming Layer (lsl:NAME)"
             )
-        raise common.UsageError(f"SOURCE {args.source} not found; give a recording file or lsl:NAME")
+        raise common.UsageError(
+            f"SOURCE {args.source} not found; give a recording file or lsl:NAME"
+        )
     arm, opts = _arm(args, model)
     return read(path, arm, resample=common.model_period(model), **opts)
 

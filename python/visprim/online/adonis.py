@@ -130,9 +130,7 @@ class LiveAdonis:
         self._err_sq = 0.0
         self._err_n = 0
         self._behind = 0.0
-        self._periodic = [
-            c for c in periodic_channels("zyz", len(self.arms)) if c % 4 in (0, 2)
-        ]
+        self._periodic = [c for c in periodic_channels("zyz", len(self.arms)) if c % 4 in (0, 2)]
 
     # ------------------------------------------------------------------ input
 

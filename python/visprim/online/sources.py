@@ -24,6 +24,7 @@ timestamps, in seconds since the first sample received.
 from __future__ import annotations
 
 import contextlib
+import importlib
 import os
 import time
 from collections.abc import Callable, Iterator
@@ -160,7 +161,7 @@ def _lsl() -> Any:
     with the events)."""
     global _configured
     try:
-        import mne_lsl.lsl as lsl
+        lsl = importlib.import_module("mne_lsl.lsl")
     except ImportError as exc:
         err = ImportError(LSL_EXTRA)
         err.name = "mne_lsl"
@@ -176,10 +177,11 @@ def _lsl() -> Any:
 def _lost_error() -> type[BaseException]:
     """liblsl's "stream lost" exception (RuntimeError if mne-lsl moves it)."""
     try:
-        from mne_lsl.lsl._utils import LostError
+        utils = importlib.import_module("mne_lsl.lsl._utils")
     except ImportError:
         return RuntimeError
-    return LostError  # type: ignore[no-any-return]
+    lost: type[BaseException] = getattr(utils, "LostError", RuntimeError)
+    return lost
 
 
 class LslSource:
