@@ -38,6 +38,7 @@ from visprim.model import PrimitiveModel
 from visprim.online import OnlinePipeline, SegmentClosed
 from visprim.online.adonis import LiveAdonis
 from visprim.online.sources import RecordingSource
+from visprim.trial import Trial
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "hdm05_cut_amc"
@@ -74,7 +75,7 @@ def _commit() -> str:
         return "unknown"
 
 
-def one_run(model: PrimitiveModel, trial) -> dict[str, float]:  # type: ignore[no-untyped-def]
+def one_run(model: PrimitiveModel, trial: Trial) -> dict[str, float]:
     pipe = OnlinePipeline(model)
     adonis = LiveAdonis(model)
     push_s = 0.0

@@ -108,8 +108,7 @@ def test_watch_fast_writes_the_events_of_the_pipeline_pushed_directly(
         "4",
         "--out",
         str(out),
-        "--classifier",
-        *map(str, refs),
+        *[a for p in refs for a in ("--classifier", str(p))],
     )
     assert r.returncode == 0, r.stderr
     got = _lines(out)

@@ -337,13 +337,13 @@ def register(sub: Any) -> None:
     p.add_argument("--model", required=True, help="model file written by `visprim learn`")
     p.add_argument(
         "--classifier",
-        nargs="+",
+        action="append",
         default=None,
         metavar="DATA",
-        help="labelled recordings (files or folders; labels from labels.tsv beside them, "
-        "--labels, or Bandai-Namco file names, as `visprim evaluate` reads them): a DTW "
-        "1-NN classifier of whole movements is fitted on them for the running and final "
-        "class (default: no class events)",
+        help="labelled recordings, a file or a folder (repeat the option for more; labels "
+        "from labels.tsv beside them, --labels, or Bandai-Namco file names, as `visprim "
+        "evaluate` reads them): a DTW 1-NN classifier of whole movements is fitted on them "
+        "for the running and final class (default: no class events)",
     )
     p.add_argument(
         "--labels", default=None, metavar="TSV", help="a labels table for the --classifier data"
