@@ -286,3 +286,15 @@ def test_adonis_plays_every_segment_and_keeps_up(
 
     final = positions_to_angles(adonis.skel, adonis.skel.getPositions(), 2)[0]
     assert np.degrees(np.abs(final[[1, 3, 5, 7]] - adonis.hold[[1, 3, 5, 7]])).max() < 5.0
+
+
+def test_watch_without_the_lsl_extra_says_so_in_one_line(
+    model_file: tuple[Path, Any], monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture
+) -> None:
+    from visprim.cli.main import main
+
+    monkeypatch.setitem(sys.modules, "mne_lsl", None)
+    monkeypatch.setitem(sys.modules, "mne_lsl.lsl", None)
+    assert main(["watch", "lsl:nobody", "--model", str(model_file[0])]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "visprim[lsl]" in err[0] and "lsl:nobody" in err[0]
