@@ -409,3 +409,18 @@ READ_OPTIONS: Mapping[str, ReadOption] = {
         ReadOption("mirror", False, ("bvh", "amc", "c3d", "amass", "trc", "video")),
     )
 }
+
+# ---------------------------------------------------------------------------- video keypoints
+
+#: Four-view triangulation (:func:`visprim.io.views.triangulate_keypoints`): an observation
+#: whose reprojection error exceeds this many pixels is left out (worst view first, while
+#: more than ``min_views`` remain). Pose2Sim's default threshold, for 1080p views.
+TRIANGULATION_MAX_REPROJECTION_PX: float = 15.0
+
+#: Zero-phase low-pass cutoff (Hz) of video keypoints before they become a trial
+#: (``lowpass_hz`` of :func:`visprim.io.keypoints.trial_pieces_from_keypoints`; None: no
+#: smoothing). Chosen by ``benches/video_accuracy.py`` (single camera against the four-view
+#: reference, leave one camera out; see docs/video.rst).
+VIDEO_LOWPASS_HZ: float | None = None
+#: Butterworth order of that low-pass (forward and backward, so twice this in effect).
+VIDEO_LOWPASS_ORDER: int = 4

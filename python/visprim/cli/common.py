@@ -181,7 +181,7 @@ def read_files(
     if not trials:
         raise CLIError(
             f"no trials could be read from {', '.join(paths)}; give recordings "
-            "(.bvh, .amc, .c3d, .csv) or the reader options their messages ask for"
+            f"({', '.join(sorted(FORMATS))}) or the reader options their messages ask for"
         )
     return list(trials)
 

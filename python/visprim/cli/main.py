@@ -37,6 +37,7 @@ COMMANDS: tuple[str, ...] = (
     "evaluate",
     "simulate",
     "imitate",
+    "watch",
     "export-robot",
 )
 

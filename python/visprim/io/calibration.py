@@ -1,4 +1,5 @@
-"""Camera calibrations: the Qualisys QCA format → pinhole cameras with lens distortion.
+"""Camera calibrations: Qualisys QCA and Pose2Sim/OpenCV TOML → pinhole cameras with lens
+distortion.
 
 A :class:`Camera` follows OpenCV's conventions: ``R``, ``t`` map world points (metres) to
 camera coordinates (x right, y down, z forward), ``K`` is the pixel matrix and ``dist`` the
@@ -14,8 +15,18 @@ error of the four-view triangulation of the shared Pose2Sim clip (``benches/vide
   metres; ``Rx(π)`` turns Qualisys' camera axes, y up and looking along −z, into OpenCV's);
 * ``<intrinsic>``: focal lengths and principal point in 1/64 sub-pixel sensor units (÷ 64
   for pixels; the principal point relative to the ``fov_video`` corner), radial
-  ``radialDistortion1–3`` and tangential ``tangentalDistortion1–2`` coefficients;
+  ``radialDistortion1–2`` and tangential ``tangentalDistortion1–2`` coefficients, also
+  ÷ 64 as Pose2Sim reads them (its TOML → QCA writer multiplies them by 64, and the shared
+  clip's file was written that way); ``radialDistortion3`` is ignored, as Pose2Sim does;
 * ``<fov_video>``: the image size (``right − left + 1`` × ``bottom − top + 1``).
+
+Pose2Sim/OpenCV TOML (what Pose2Sim's calibration writes, also anipose's layout): one table
+per camera with ``name``, ``size = [width, height]`` px, ``matrix`` (3 × 3 ``K``),
+``distortions = [k1, k2, p1, p2]`` (optionally ``k3``), ``rotation`` (a Rodrigues vector,
+world → camera, rad), ``translation`` (m) and ``fisheye`` (only ``false`` is supported);
+tables without ``matrix`` (``metadata``...) are skipped. Validated in the tests by reading
+the QCA file converted with Pose2Sim's formulas (``calib_qca_fun``) and comparing the
+projections of the same 3-D points through both readers.
 """
 
 from __future__ import annotations
@@ -30,9 +41,11 @@ from numpy.typing import NDArray
 
 from visprim.io.errors import MalformedFileError, ReadError
 
-__all__ = ["Camera", "read_calibration", "read_qca"]
+__all__ = ["Camera", "read_calibration", "read_qca", "read_toml", "rodrigues"]
 
 _RX_PI = np.diag([1.0, -1.0, -1.0])
+#: QCA distortion coefficients are stored × 64 (Pose2Sim's convention, see the module docstring).
+QCA_DISTORTION_SCALE = 64.0
 #: Fixed-point iterations of :meth:`Camera.undistort` (converged to < 1e-9 px for the
 #: distortions of ordinary lenses; checked against :meth:`Camera.project` in the tests).
 UNDISTORT_ITERATIONS = 20
@@ -160,18 +173,88 @@ def read_qca(path: str | os.PathLike[str]) -> list[Camera]:
                 _float(p, intr, "radialDistortion2"),
                 _float(p, intr, "tangentalDistortion1"),
                 _float(p, intr, "tangentalDistortion2"),
-                _float(p, intr, "radialDistortion3"),
+                0.0,
             ]
         )
+        dist[:4] /= QCA_DISTORTION_SCALE
         rot = _RX_PI @ m
         out.append(Camera(name=name, size=size, K=k, dist=dist, R=rot, t=-rot @ centre))
     return out
 
 
+def rodrigues(vector: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Rotation matrix (3 × 3) of a Rodrigues vector (axis × angle, rad), as OpenCV's
+    ``cv2.Rodrigues``."""
+    v = np.asarray(vector, dtype=np.float64)
+    theta = float(np.linalg.norm(v))
+    if theta < 1e-12:
+        return np.eye(3)
+    k = v / theta
+    kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + np.sin(theta) * kx + (1 - np.cos(theta)) * (kx @ kx)
+
+
+def _numbers(
+    p: Path, cam: str, table: dict[str, object], key: str, shape: tuple[int, ...]
+) -> NDArray[np.float64]:
+    if key not in table:
+        raise MalformedFileError(p, f"camera {cam} has no {key}")
+    try:
+        a = np.asarray(table[key], dtype=np.float64)
+    except (TypeError, ValueError):
+        raise MalformedFileError(p, f"camera {cam}: {key} is not numbers") from None
+    if a.shape != shape or not np.isfinite(a).all():
+        raise MalformedFileError(
+            p, f"camera {cam}: {key} must be {shape} finite numbers, got shape {a.shape}"
+        )
+    return a
+
+
+def read_toml(path: str | os.PathLike[str]) -> list[Camera]:
+    """The cameras of a Pose2Sim/OpenCV TOML calibration, in file order (see the module
+    docstring). Raises :class:`ReadError` naming the file and the problem."""
+    import tomllib
+
+    p = Path(path)
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ReadError(p, f"cannot read: {exc.strerror or exc}") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise MalformedFileError(p, f"not TOML ({exc})") from None
+    out = []
+    for key, table in data.items():
+        if not isinstance(table, dict) or "matrix" not in table:
+            continue
+        name = str(table.get("name", key))
+        if table.get("fisheye", False):
+            raise MalformedFileError(p, f"camera {name}: fisheye lenses are not supported")
+        size = _numbers(p, name, table, "size", (2,))
+        k = _numbers(p, name, table, "matrix", (3, 3))
+        if k[0, 0] <= 0 or k[1, 1] <= 0:
+            raise MalformedFileError(p, f"camera {name}: focal lengths must be positive")
+        raw = np.asarray(table.get("distortions", []), dtype=np.float64).ravel()
+        if raw.size not in (4, 5) or not np.isfinite(raw).all():
+            raise MalformedFileError(
+                p, f"camera {name}: distortions must be 4 or 5 numbers (k1, k2, p1, p2[, k3])"
+            )
+        dist = np.zeros(5)
+        dist[: raw.size] = raw
+        rot = rodrigues(_numbers(p, name, table, "rotation", (3,)))
+        t = _numbers(p, name, table, "translation", (3,))
+        out.append(Camera(name=name, size=(int(size[0]), int(size[1])), K=k, dist=dist, R=rot, t=t))
+    if not out:
+        raise MalformedFileError(p, "no camera tables (with a matrix) in this TOML file")
+    return out
+
+
 def read_calibration(path: str | os.PathLike[str]) -> list[Camera]:
-    """Cameras from a calibration file; the Qualisys QCA format (``.qca``, ``.qca.txt``)."""
+    """Cameras from a calibration file: Qualisys QCA (``.qca``, ``.qca.txt``) or
+    Pose2Sim/OpenCV TOML (``.toml``)."""
     p = Path(path)
     name = p.name.lower()
     if name.endswith(".qca") or name.endswith(".qca.txt"):
         return read_qca(p)
-    raise ReadError(p, "unknown calibration format; supported: Qualisys .qca / .qca.txt")
+    if name.endswith(".toml"):
+        return read_toml(p)
+    raise ReadError(p, "unknown calibration format; supported: Qualisys .qca / .qca.txt, .toml")

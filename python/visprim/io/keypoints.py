@@ -76,6 +76,7 @@ __all__ = [
     "ROLES",
     "resolve_layout",
     "trial_from_keypoints",
+    "smooth_keypoints",
     "trial_pieces_from_keypoints",
 ]
 
@@ -239,6 +240,31 @@ def _times(where: str, n: int, times: ArrayLike | None, rate: float | None) -> N
     return np.arange(n, dtype=np.float64) * period
 
 
+def smooth_keypoints(
+    times: NDArray[np.float64], points: NDArray[np.float64], cutoff_hz: float, where: str = ""
+) -> NDArray[np.float64]:
+    """Zero-phase Butterworth low-pass (order :data:`visprim.params.VIDEO_LOWPASS_ORDER`) of
+    gap-free keypoints ``points`` (T, ...) sampled at ``times`` (s); ``cutoff_hz`` must lie
+    below the Nyquist frequency of the median frame rate. Short series are filtered with
+    reduced padding (:func:`visprim.filtering.lowpass`, ``short="reduce"``)."""
+    from visprim.filtering import lowpass
+    from visprim.params import VIDEO_LOWPASS_ORDER
+
+    n = points.shape[0]
+    if n < 3:
+        return points
+    rate = 1.0 / float(np.median(np.diff(times)))
+    nyquist = rate / 2
+    if not (np.isfinite(cutoff_hz) and 0 < cutoff_hz < nyquist):
+        raise ValueError(
+            f"{where}: lowpass_hz={cutoff_hz!r} must be in (0, {nyquist:g}) Hz (the Nyquist "
+            f"frequency of {rate:g} frames/s)"
+        )
+    flat = points.reshape(n, -1)
+    out = lowpass(flat, order=VIDEO_LOWPASS_ORDER, cutoff=cutoff_hz / nyquist, short="reduce")
+    return np.asarray(out).reshape(points.shape)
+
+
 def trial_pieces_from_keypoints(
     points: ArrayLike | Mapping[str, ArrayLike],
     layout: str | Mapping[str, RoleSpec] = "blazepose33",
@@ -260,6 +286,7 @@ def trial_pieces_from_keypoints(
     source: str | os.PathLike[str] | None = None,
     repetitions: int = 1,
     meta: Mapping[str, Any] | None = None,
+    lowpass_hz: float | None = None,
 ) -> list[Trial]:
     """Trials (several when long gaps split the recording) from 3-D keypoints.
 
@@ -279,6 +306,11 @@ def trial_pieces_from_keypoints(
     max_gap, on_gap, gap_method, min_duration : gap policy of :mod:`visprim.io.gaps`
     name, source, repetitions, meta : copied into the trials (``source`` also names the data
         in error messages)
+    lowpass_hz : zero-phase Butterworth low-pass of the keypoints (order
+        :data:`visprim.params.VIDEO_LOWPASS_ORDER`, cutoff in Hz, below the Nyquist
+        frequency of the frame rate), applied to each piece after its gaps are filled;
+        None (default) leaves them as they are. The video readers pass
+        :data:`visprim.params.VIDEO_LOWPASS_HZ`.
 
     Raises
     ------
@@ -350,6 +382,8 @@ def trial_pieces_from_keypoints(
     )
     recordings: list[list[ArmRecording]] = []
     for a, b, filled in pieces:
+        if lowpass_hz is not None:
+            filled = smooth_keypoints(t[a:b], filled, lowpass_hz, where)
         rp = {r: filled[:, i] for i, r in enumerate(used)}
         body = None
         if has_torso:
@@ -395,6 +429,7 @@ def trial_pieces_from_keypoints(
         "arm": arm,
         "mirrored": bool(mirror),
         "heading_deg": heading,
+        "lowpass_hz": None if lowpass_hz is None else float(lowpass_hz),
     }
     trials = []
     for i, piece in enumerate(recordings):

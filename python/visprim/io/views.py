@@ -11,7 +11,10 @@
 3. Keypoints are undistorted to normalised image coordinates (:meth:`Camera.undistort`) and
    triangulated by weighted DLT (the Rust kernel ``triangulate_points``): each view's weight is
    its confidence, views below ``min_confidence`` or without a person are left out, a point
-   needs ``min_views`` views.
+   needs ``min_views`` views. Two robust steps (:func:`triangulate_keypoints`): a view whose
+   estimator exchanged left and right (common when the person faces away from it) is put
+   back per frame and per left/right pair, by reprojection; then outlier observations
+   (reprojection above ``max_reprojection`` px) are left out, worst first.
 4. The 3-D keypoints (world frame of the calibration: Qualisys, metres, +z up) become the trial
    as any keypoints do (:func:`visprim.io.keypoints.trial_pieces_from_keypoints`); points seen
    by too few views are gaps (short ones filled, long ones split or refused).
@@ -35,9 +38,19 @@ from visprim.io.calibration import Camera, read_calibration
 from visprim.io.errors import GapError, ReadError
 from visprim.io.keypoints import read_error, trial_pieces_from_keypoints
 from visprim.io.video_pose import PoseEstimator, VideoPoses, video_poses
+from visprim.params import TRIANGULATION_MAX_REPROJECTION_PX, VIDEO_LOWPASS_HZ
 from visprim.trial import Trial
 
-__all__ = ["MultiView", "read_views", "read_views_pieces", "triangulate_views"]
+__all__ = [
+    "SIDE_PAIRS",
+    "MultiView",
+    "Triangulation",
+    "read_views",
+    "read_views_pieces",
+    "triangulate_keypoints",
+    "triangulate_poses",
+    "triangulate_views",
+]
 
 
 @dataclass
@@ -47,7 +60,8 @@ class MultiView:
     ``points`` (T, K, 3) metres, world frame (NaN: fewer than ``min_views`` views);
     ``times`` (T,) s; ``reprojection`` (T, K, V) pixel distance between each used observation
     and the reprojected point (NaN where the view was not used); ``views_used`` (T, K);
-    ``poses`` per view; ``cameras`` matched to the views.
+    ``poses`` per view; ``cameras`` matched to the views; ``swapped`` (T, V) left/right
+    pairs exchanged per frame and view; ``rejected`` (T, K, V) outlier observations.
     """
 
     points: NDArray[np.float64]
@@ -57,6 +71,8 @@ class MultiView:
     poses: list[VideoPoses]
     cameras: list[Camera]
     layout: str
+    swapped: NDArray[np.int64]
+    rejected: NDArray[np.bool_]
     meta: dict[str, Any] = field(default_factory=dict)
 
 
@@ -75,6 +91,145 @@ def match_cameras(paths: Sequence[Path], cameras: Sequence[Camera], where: str) 
     return list(cameras)
 
 
+#: Left/right keypoint pairs (left index, right index) of each layout: the points a pose
+#: estimator can exchange in one view (typically when the person turns away from it).
+SIDE_PAIRS: dict[str, tuple[tuple[int, int], ...]] = {
+    "blazepose33": tuple((a, a + 3) for a in (1, 2, 3))
+    + tuple((a, a + 1) for a in range(7, 33, 2)),
+    "coco17": tuple((a, a + 1) for a in range(1, 17, 2)),
+    "h36m17": ((4, 1), (5, 2), (6, 3), (11, 14), (12, 15), (13, 16)),
+}
+
+
+@dataclass
+class Triangulation:
+    """Result of :func:`triangulate_keypoints`.
+
+    ``points`` (T, K, 3) world units of the projections (NaN: not enough consistent views);
+    ``reprojection`` (T, K, V) px between each used observation and the reprojected point
+    (NaN where the view was not used); ``views_used`` (T, K); ``swapped`` (T, V) number of
+    left/right pairs exchanged in each view and frame; ``rejected`` (T, K, V) observations
+    left out as outliers (reprojection above ``max_reprojection``).
+    """
+
+    points: NDArray[np.float64]
+    reprojection: NDArray[np.float64]
+    views_used: NDArray[np.int64]
+    swapped: NDArray[np.int64]
+    rejected: NDArray[np.bool_]
+
+
+def _dlt(
+    proj: NDArray[np.float64],
+    norm: NDArray[np.float64],
+    weights: NDArray[np.float64],
+    min_views: int,
+) -> NDArray[np.float64]:
+    """The Rust weighted DLT on (..., V, 2) normalised coordinates → (..., 3)."""
+    from visprim import _visprim
+
+    lead, v = norm.shape[:-2], norm.shape[-2]
+    flat = _visprim.triangulate_points(
+        proj,
+        np.ascontiguousarray(norm.reshape(-1, v, 2), dtype=np.float64),
+        np.ascontiguousarray(weights.reshape(-1, v), dtype=np.float64),
+        min_views=int(min_views),
+    )
+    return np.asarray(flat).reshape(*lead, 3)
+
+
+def _reproject(
+    cameras: Sequence[Camera], points: NDArray[np.float64], pixels: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Pixel distance (..., V) between ``pixels`` (..., V, 2) and ``points`` (..., 3)
+    projected by each camera (NaN where either is missing)."""
+    return np.stack(
+        [
+            np.linalg.norm(c.project(points) - pixels[..., i, :], axis=-1)
+            for i, c in enumerate(cameras)
+        ],
+        axis=-1,
+    )
+
+
+#: Views up to which every exchange hypothesis is tried (2^(V−1) of them).
+MAX_EXHAUSTIVE_VIEWS = 8
+
+
+def _swap_combos(v: int) -> NDArray[np.bool_]:
+    """Which views to exchange, one row per hypothesis (C, V), fewest exchanges first. A
+    hypothesis and its complement give the same points with the labels exchanged, so only
+    one of each is kept: fewer than V/2 exchanges, or exactly V/2 with view 0 kept. Above
+    :data:`MAX_EXHAUSTIVE_VIEWS` views, only single-view exchanges are tried."""
+    if v > MAX_EXHAUSTIVE_VIEWS:
+        return np.vstack([np.zeros((1, v), dtype=bool), np.eye(v, dtype=bool)])
+    rows = []
+    for code in range(2**v):
+        row = [(code >> i) & 1 == 1 for i in range(v)]
+        n = sum(row)
+        if 2 * n < v or (2 * n == v and not row[0]):
+            rows.append(row)
+    combos = np.array(rows, dtype=bool)
+    return combos[np.argsort(combos.sum(axis=1), kind="stable")]
+
+
+def resolve_swaps(
+    cameras: Sequence[Camera],
+    pixels: NDArray[np.float64],
+    norm: NDArray[np.float64],
+    weights: NDArray[np.float64],
+    pairs: Sequence[tuple[int, int]],
+    *,
+    min_views: int = 2,
+    cap: float = 50.0,
+) -> NDArray[np.bool_]:
+    """Left/right exchanges, per frame, pair and view: (T, P, V) bool.
+
+    For each left/right pair and frame, every hypothesis of :func:`_swap_combos` (which views
+    to exchange) is triangulated and scored by the reprojection error of both points over
+    the views that see them, each observation's error capped at ``cap`` px (so one outlier
+    view does not decide); the lowest score wins, ties going to the fewest exchanges.
+    """
+    t, _, v, _ = pixels.shape
+    if not pairs:
+        return np.zeros((t, 0, v), dtype=bool)
+    left = np.array([a for a, _ in pairs])
+    right = np.array([b for _, b in pairs])
+    proj = np.ascontiguousarray(np.stack([c.projection for c in cameras]), dtype=np.float64)
+    combos = _swap_combos(v)
+    scores = np.empty((combos.shape[0], t, len(pairs)))
+    for ci, swap in enumerate(combos):
+        # (T, P, 2 sides, V, 2): the observations labelled left / right under this hypothesis.
+        lo = np.where(swap[:, None], norm[:, right], norm[:, left])
+        ro = np.where(swap[:, None], norm[:, left], norm[:, right])
+        lp = np.where(swap[:, None], pixels[:, right], pixels[:, left])
+        rp = np.where(swap[:, None], pixels[:, left], pixels[:, right])
+        lw = np.where(swap, weights[:, right], weights[:, left])
+        rw = np.where(swap, weights[:, left], weights[:, right])
+        nrm = np.stack([lo, ro], axis=2)
+        pix = np.stack([lp, rp], axis=2)
+        w = np.stack([lw, rw], axis=2)
+        pts = _dlt(proj, nrm, w, min_views)
+        err = np.minimum(np.nan_to_num(_reproject(cameras, pts, pix), nan=cap), cap)
+        scores[ci] = np.where(w > 0, err, 0.0).sum(axis=(2, 3))
+    best = np.argmin(scores, axis=0)  # first minimum: the fewest exchanges
+    return combos[best]
+
+
+def _apply_swaps(
+    a: NDArray[Any], swaps: NDArray[np.bool_], pairs: Sequence[tuple[int, int]]
+) -> NDArray[Any]:
+    """Exchange the left/right keypoints of ``a`` (T, K, V, ...) where ``swaps`` (T, P, V)."""
+    out = a.copy()
+    for pi, (left, right) in enumerate(pairs):
+        s = swaps[:, pi, :]
+        if a.ndim == 4:
+            s = s[..., None]
+        out[:, left] = np.where(s, a[:, right], a[:, left])
+        out[:, right] = np.where(s, a[:, left], a[:, right])
+    return out
+
+
 def triangulate_keypoints(
     cameras: Sequence[Camera],
     pixels: NDArray[np.float64],
@@ -82,34 +237,132 @@ def triangulate_keypoints(
     *,
     min_confidence: float = 0.5,
     min_views: int = 2,
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
-    """Weighted DLT of keypoints seen by calibrated cameras.
+    pairs: Sequence[tuple[int, int]] = (),
+    max_reprojection: float | None = TRIANGULATION_MAX_REPROJECTION_PX,
+) -> Triangulation:
+    """Robust weighted DLT of keypoints seen by calibrated cameras.
 
     ``pixels`` (T, K, V, 2) distorted pixel coordinates (NaN: not seen), ``confidence``
-    (T, K, V) in [0, 1]. Returns the points (T, K, 3), the reprojection error (T, K, V) px of
-    each used observation, and the number of views used (T, K).
-    """
-    from visprim import _visprim
+    (T, K, V) in [0, 1] (the DLT weight; below ``min_confidence`` the view is not used).
 
+    1. Left/right exchanges: with ``pairs`` (e.g. :data:`SIDE_PAIRS` of the layout), each
+       view's left and right keypoints are exchanged where that fits the other views better
+       (:func:`resolve_swaps`).
+    2. Outlier views: while the worst observation of a point reprojects further than
+       ``max_reprojection`` px and more than ``min_views`` views remain, that view is left
+       out and the point triangulated again; a point still above the bound with
+       ``min_views`` views is NaN (no consistent views). ``None`` keeps every view.
+    """
+    if max_reprojection is not None and not max_reprojection > 0:
+        raise ValueError(f"max_reprojection must be > 0 px or None, got {max_reprojection!r}")
     t, k, v, _ = pixels.shape
     norm = np.stack([cameras[i].undistort(pixels[:, :, i]) for i in range(v)], axis=2)
     weights = np.where(
         (confidence >= min_confidence) & np.isfinite(norm).all(axis=-1), confidence, 0.0
     )
+    swaps = resolve_swaps(cameras, pixels, norm, weights, pairs, min_views=min_views)
+    if pairs:
+        pixels = _apply_swaps(pixels, swaps, pairs)
+        norm = _apply_swaps(norm, swaps, pairs)
+        weights = _apply_swaps(weights, swaps, pairs)
     proj = np.ascontiguousarray(np.stack([c.projection for c in cameras]), dtype=np.float64)
-    flat = _visprim.triangulate_points(
-        proj,
-        np.ascontiguousarray(norm.reshape(t * k, v, 2), dtype=np.float64),
-        np.ascontiguousarray(weights.reshape(t * k, v), dtype=np.float64),
-        min_views=int(min_views),
-    )
-    points = flat.reshape(t, k, 3)
+    rejected = np.zeros((t, k, v), dtype=bool)
+    points = _dlt(proj, norm, weights, min_views)
+    if max_reprojection is not None:
+        for _ in range(max(v - min_views, 0)):
+            err = np.where(weights > 0, _reproject(cameras, points, pixels), -np.inf)
+            err = np.nan_to_num(err, nan=np.inf, neginf=-np.inf)
+            worst = np.argmax(err, axis=-1)
+            bad = (np.take_along_axis(err, worst[..., None], -1)[..., 0] > max_reprojection) & (
+                (weights > 0).sum(axis=-1) > min_views
+            )
+            if not bad.any():
+                break
+            ti, ki = np.nonzero(bad)
+            weights[ti, ki, worst[ti, ki]] = 0.0
+            rejected[ti, ki, worst[ti, ki]] = True
+            points = _dlt(proj, norm, weights, min_views)
+        err = np.where(weights > 0, _reproject(cameras, points, pixels), -np.inf)
+        still = np.nan_to_num(err, nan=np.inf).max(axis=-1) > max_reprojection
+        points[still] = np.nan
     used = weights > 0
-    reproj = np.full((t, k, v), np.nan)
-    for i, cam in enumerate(cameras):
-        err = np.linalg.norm(cam.project(points) - pixels[:, :, i], axis=-1)
-        reproj[:, :, i] = np.where(used[:, :, i] & np.isfinite(points).all(axis=-1), err, np.nan)
-    return points, reproj, used.sum(axis=-1).astype(np.int64)
+    reproj = _reproject(cameras, points, pixels)
+    finite: NDArray[np.bool_] = np.asarray(np.isfinite(points).all(axis=-1))
+    reproj = np.where(used & finite[..., None], reproj, np.nan)
+    return Triangulation(
+        points=points,
+        reprojection=reproj,
+        views_used=used.sum(axis=-1).astype(np.int64),
+        swapped=swaps.sum(axis=1).astype(np.int64),
+        rejected=rejected,
+    )
+
+
+def triangulate_poses(
+    poses: Sequence[VideoPoses],
+    cameras: Sequence[Camera],
+    *,
+    min_confidence: float = 0.5,
+    min_views: int = 2,
+    swaps: bool = True,
+    max_reprojection: float | None = TRIANGULATION_MAX_REPROJECTION_PX,
+    views: Sequence[str] = (),
+) -> MultiView:
+    """Triangulate the poses of synchronised views (one :class:`VideoPoses` per camera, in
+    the cameras' order) over the frames every view has; ``swaps`` checks left/right
+    exchanges with the layout's :data:`SIDE_PAIRS`."""
+    if len(poses) != len(cameras) or len(poses) < 2:
+        raise ValueError(
+            f"need one pose series per camera, at least 2; got {len(poses)} / {len(cameras)}"
+        )
+    layouts = {str(q.meta["layout"]) for q in poses}
+    if len(layouts) != 1:
+        raise ValueError(f"the views have different keypoint layouts: {sorted(layouts)}")
+    layout = layouts.pop()
+    n = min(q.times.shape[0] for q in poses)
+    k = min(q.image.shape[1] for q in poses)
+    pixels = np.stack([q.image[:n, :k] for q in poses], axis=2)
+    conf = np.stack([np.where(q.found[:n, None], q.confidence[:n, :k], 0.0) for q in poses], axis=2)
+    pairs = [(a, b) for a, b in SIDE_PAIRS.get(layout, ()) if a < k and b < k] if swaps else []
+    tri = triangulate_keypoints(
+        cameras,
+        pixels,
+        conf,
+        min_confidence=min_confidence,
+        min_views=min_views,
+        pairs=pairs,
+        max_reprojection=max_reprojection,
+    )
+    reproj = tri.reprojection
+    meta = {
+        "format": "video views",
+        "views": list(views),
+        "cameras": [c.name for c in cameras],
+        "frames": n,
+        "person_found": [float(q.found[:n].mean()) for q in poses],
+        "reprojection_px_median": float(np.nanmedian(reproj))
+        if np.isfinite(reproj).any()
+        else None,
+        "min_views": int(min_views),
+        "max_reprojection_px": max_reprojection,
+        "side_swaps_per_view": [int(x) for x in tri.swapped.sum(axis=0)],
+        "rejected_per_view": [int(x) for x in tri.rejected.sum(axis=(0, 1))],
+        "estimator": poses[0].meta.get("estimator"),
+        "times_from": poses[0].meta.get("times_from"),
+        "rate": poses[0].meta.get("rate"),
+    }
+    return MultiView(
+        points=tri.points,
+        times=poses[0].times[:n],
+        reprojection=reproj,
+        views_used=tri.views_used,
+        poses=list(poses),
+        cameras=list(cameras),
+        layout=layout,
+        swapped=tri.swapped,
+        rejected=tri.rejected,
+        meta=meta,
+    )
 
 
 def triangulate_views(
@@ -119,10 +372,13 @@ def triangulate_views(
     estimator: PoseEstimator | None = None,
     min_confidence: float = 0.5,
     min_views: int = 2,
+    swaps: bool = True,
+    max_reprojection: float | None = TRIANGULATION_MAX_REPROJECTION_PX,
     max_frames: int | None = None,
     cache: bool = True,
 ) -> MultiView:
-    """Pose of every view, triangulated (see the module docstring)."""
+    """Pose of every view, triangulated (see the module docstring and
+    :func:`triangulate_keypoints`)."""
     paths = [Path(v) for v in videos]
     if len(paths) < 2:
         raise ValueError(f"read_views needs at least 2 videos, got {len(paths)}")
@@ -133,39 +389,14 @@ def triangulate_views(
         cams_all = list(calibration)
     cameras = match_cameras(paths, cams_all, where)
     poses = [video_poses(p, estimator, max_frames=max_frames, cache=cache) for p in paths]
-    layouts = {str(q.meta["layout"]) for q in poses}
-    if len(layouts) != 1:
-        raise ValueError(f"the views have different keypoint layouts: {sorted(layouts)}")
-    n = min(q.times.shape[0] for q in poses)
-    k = min(q.image.shape[1] for q in poses)
-    pixels = np.stack([q.image[:n, :k] for q in poses], axis=2)
-    conf = np.stack([np.where(q.found[:n, None], q.confidence[:n, :k], 0.0) for q in poses], axis=2)
-    points, reproj, used = triangulate_keypoints(
-        cameras, pixels, conf, min_confidence=min_confidence, min_views=min_views
-    )
-    meta = {
-        "format": "video views",
-        "views": [str(p) for p in paths],
-        "cameras": [c.name for c in cameras],
-        "frames": n,
-        "person_found": [float(q.found[:n].mean()) for q in poses],
-        "reprojection_px_median": float(np.nanmedian(reproj))
-        if np.isfinite(reproj).any()
-        else None,
-        "min_views": int(min_views),
-        "estimator": poses[0].meta["estimator"],
-        "times_from": poses[0].meta["times_from"],
-        "rate": poses[0].meta["rate"],
-    }
-    return MultiView(
-        points=points,
-        times=poses[0].times[:n],
-        reprojection=reproj,
-        views_used=used,
-        poses=poses,
-        cameras=cameras,
-        layout=layouts.pop(),
-        meta=meta,
+    return triangulate_poses(
+        poses,
+        cameras,
+        min_confidence=min_confidence,
+        min_views=min_views,
+        swaps=swaps,
+        max_reprojection=max_reprojection,
+        views=[str(p) for p in paths],
     )
 
 
@@ -184,14 +415,25 @@ def read_views_pieces(
     on_gap: str = "split",
     gap_method: str = "cubic",
     min_duration: float = 0.5,
+    swaps: bool = True,
+    max_reprojection: float | None = TRIANGULATION_MAX_REPROJECTION_PX,
+    lowpass_hz: float | None = VIDEO_LOWPASS_HZ,
 ) -> list[Trial]:
-    """Trials from several calibrated views (several when long gaps split them)."""
+    """Trials from several calibrated views (several when long gaps split them).
+
+    ``calibration``: a Qualisys ``.qca.txt`` or Pose2Sim/OpenCV ``.toml`` file, or cameras;
+    ``swaps``, ``max_reprojection`` (px): see :func:`triangulate_keypoints`; ``lowpass_hz``:
+    smoothing of the 3-D keypoints (default :data:`visprim.params.VIDEO_LOWPASS_HZ`); the
+    other options as :func:`visprim.io.read_pieces`.
+    """
     mv = triangulate_views(
         videos,
         calibration,
         estimator=estimator,
         min_confidence=min_confidence,
         min_views=min_views,
+        swaps=swaps,
+        max_reprojection=max_reprojection,
         max_frames=max_frames,
         cache=cache,
     )
@@ -211,6 +453,7 @@ def read_views_pieces(
             name=first.parent.name or first.stem,
             source=first,
             meta=mv.meta,
+            lowpass_hz=lowpass_hz,
         )
     except ReadError:
         raise
