@@ -670,8 +670,16 @@ def video_poses(
                 ]
             else:
                 jobs = [pool.submit(first.run, end)]
-            for _ in progress.bar(_ticks(jobs, done), f"pose {p.name}", total=total, unit="frame"):
-                pass
+            try:
+                for _ in progress.bar(
+                    _ticks(jobs, done), f"pose {p.name}", total=total, unit="frame"
+                ):
+                    pass
+            except BaseException:  # interrupted: stop the passes before waiting for them
+                for seg in (first, second):
+                    if seg is not None:
+                        seg.cancel.set()
+                raise
             jobs[0].result()
             if second is not None:
                 why = _join(first, second, jobs[1])
