@@ -407,8 +407,7 @@ CLASSIFIER_PARAMETERS: tuple[Parameter, ...] = (
         "window",
         1.0,
         real(0.0, open_low=True, unit="(median segment durations)"),
-        "window of the per-frame descriptions, a multiple of the median training segment "
-        "duration",
+        "window of the per-frame descriptions, a multiple of the median training segment duration",
         None,
     ),
     _P(
