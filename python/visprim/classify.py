@@ -769,7 +769,10 @@ class MotionClassifier(_NearestSequences):
     the velocities *at what rhythm* and the duration *for how long*; the weights let each
     corpus weigh them.
 
-    Parameters (defaults declared in :data:`visprim.params.CLASSIFIER_PARAMETERS`)
+    The defaults of the settings below are declared in
+    :data:`visprim.params.CLASSIFIER_PARAMETERS`.
+
+    Parameters
     ----------
     model_params : dict, optional
         Keyword arguments of :class:`~visprim.model.PrimitiveModel`.
