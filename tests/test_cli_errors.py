@@ -277,3 +277,17 @@ def test_summary_names_the_trials_without_a_segment() -> None:
         n_primitives=2,
     )
     assert "2 trial(s) without a segment (still, idle)" in common.summary(model, 4)
+
+
+def test_python_dash_m_visprim_runs_the_cli():
+    """``python -m visprim`` is the same command line as ``visprim``."""
+    import subprocess
+    import sys
+
+    import visprim
+
+    done = subprocess.run(
+        [sys.executable, "-m", "visprim", "--version"], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == f"visprim {visprim.__version__}"

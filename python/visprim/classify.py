@@ -31,6 +31,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from itertools import product
 from typing import Any
 
 import numpy as np
@@ -41,7 +42,7 @@ from sklearn.linear_model import LogisticRegression
 from sklearn.metrics import adjusted_rand_score
 from sklearn.neighbors import NearestCentroid
 
-from visprim import kernels
+from visprim import kernels, params
 from visprim.features import from_angles, periodic_channels
 from visprim.ik import implied_joint_centres
 from visprim.model import PrimitiveModel
@@ -466,6 +467,26 @@ def arm_directions(trial: Trial) -> NDArray[np.float64]:
     return np.hstack(blocks)
 
 
+def arm_velocities(trial: Trial) -> NDArray[np.float64]:
+    """Angular velocity of the upper-arm and forearm directions (:func:`arm_directions`)
+    between consecutive frames, rad/s: (T − 1, 6 n_arms). How fast each bone turns, and
+    which way: the rhythm of a movement, which the directions themselves carry only
+    through DTW's warping."""
+    d = arm_directions(trial)
+    dt = np.diff(trial.times)[:, None]
+    return np.diff(d, axis=0) / dt
+
+
+def duration_costs(
+    queries: Sequence[Trial], references: Sequence[Trial] | None = None
+) -> NDArray[np.float64]:
+    """|log(T_q / T_r)| between the movements' durations (T, seconds): how many times
+    longer one lasts than the other, which DTW's length-normalised cost discards."""
+    q = np.log(np.array([max(t.duration, 1e-9) for t in queries]))
+    r = q if references is None else np.log(np.array([max(t.duration, 1e-9) for t in references]))
+    return np.abs(q[:, None] - r[None, :])
+
+
 def _ragged(sequences: Sequence[NDArray[np.float64]]) -> tuple[NDArray[np.float64], Any]:
     lengths = [s.shape[0] for s in sequences]
     offsets = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
@@ -700,9 +721,12 @@ def reconstructed_directions(
     return np.split(v.reshape(values.shape), first[1:])
 
 
-MOTION_METHODS: tuple[str, ...] = ("combined", "frames", "coordinates", "segments", "histogram")
-#: Candidate weights of the segment term of ``method="combined"`` (chosen in ``fit``).
-SEGMENT_WEIGHTS: tuple[float, ...] = (0.0, 0.25, 0.5, 1.0)
+MOTION_METHODS: tuple[str, ...] = params.MOTION_METHODS
+#: The costs of ``method="combined"`` (:data:`visprim.params.COMBINED_TERMS`).
+COMBINED_TERMS: tuple[str, ...] = params.COMBINED_TERMS
+#: Candidate weights of each further term (:data:`visprim.params.TERM_WEIGHTS`).
+SEGMENT_WEIGHTS: tuple[float, ...] = params.TERM_WEIGHTS
+_DEFAULTS = {p.name: p.default for p in params.CLASSIFIER_PARAMETERS}
 
 
 class MotionClassifier(_NearestSequences):
@@ -721,23 +745,32 @@ class MotionClassifier(_NearestSequences):
       (:func:`primitive_coordinates`): the movement as a path in the primitives' space.
     * ``"segments"``: the sequence of the segments' f-D projections (one point per
       segment, in time order): which strokes, in which order.
-    * ``"combined"`` (default): ``D_coordinates / s_c + w · D_segments / s_s``, each cost
-      divided by its median over pairs of training movements, and the weight ``w`` chosen
-      in ``fit`` from :data:`SEGMENT_WEIGHTS` by leave-one-group-out 1-NN accuracy on the
-      training movements (``groups`` given to ``fit``; else leave-one-out), the smallest on
-      ties. Nothing of a held-out group is used to choose it.
+    * ``"combined"`` (default): the sum of four costs (:data:`COMBINED_TERMS`), each
+      divided by its median over pairs of training movements::
+
+          D = D_coordinates + w_s · D_segments + w_v · D_velocity + w_d · D_duration
+
+      ``D_velocity`` is the DTW cost of the bones' angular velocities
+      (:func:`arm_velocities`: how fast and which way each bone turns, the rhythm that
+      warping hides), ``D_duration`` the ratio of the durations |log(T_q / T_r)|
+      (:func:`duration_costs`: how long the movement lasts, which the length-normalised
+      DTW cost discards). The three weights are chosen in ``fit`` from ``term_weights``
+      (4³ = 64 candidates) by leave-one-group-out 1-NN accuracy on the training movements
+      (``groups`` given to ``fit``; else leave-one-out), the first best in the order
+      ``w_s``, ``w_v``, ``w_d`` ascending (the smaller weights on ties). Nothing of a
+      held-out group is used to choose them.
     * ``"histogram"``: :class:`PrimitiveHistogramClassifier` (nearest centroid of the
       primitive histograms).
 
     The default was chosen by measurement on the shared recordings, leave one group out,
-    both arms, bone-direction features (accuracy; the DTW 1-NN baseline on raw directions
-    in brackets): HDM05, 11 classes, leave one actor out — coordinates 0.89, frames 0.87,
-    segments 0.79, combined 0.90 (0.87); Bandai dataset 2, 4 gestures, leave one style out —
-    coordinates and frames lose to the baseline on slow styles (elderly, feminine: 0.63–0.75),
-    segments hold there (0.94–1.0), and the combination is the best of both. The per-frame
-    path says *how* the arm moves, the segment sequence *which strokes in which order*;
-    ``w`` lets each corpus weigh them. The commands reproducing these figures are in the
-    README (``visprim evaluate``).
+    both arms, with the weights chosen by the inner leave-one-group-out of each fold; the
+    figures and the commands reproducing them are in ``docs/evaluate.rst``. The per-frame
+    path says *how* the arm moves, the segment sequence *which strokes in which order*,
+    the velocities *at what rhythm* and the duration *for how long*; the weights let each
+    corpus weigh them.
+
+    The defaults of the settings below are declared in
+    :data:`visprim.params.CLASSIFIER_PARAMETERS`.
 
     Parameters
     ----------
@@ -752,10 +785,13 @@ class MotionClassifier(_NearestSequences):
     n_neighbors : int
         Neighbours voting (default 1).
     step : int
-        The per-frame descriptions are taken at every ``step``-th frame (default 2: 68 ms
-        at the 34 ms period). Windows a stroke long that start one frame apart overlap
-        almost entirely, so every second one carries the same path at a quarter of the DTW
-        cost; on the shared benchmarks step 2 gives the accuracies of step 1 (README).
+        The per-frame descriptions in primitive space are taken at every ``step``-th
+        frame (default 2: 68 ms at the 34 ms period). Windows a stroke long that start one
+        frame apart overlap almost entirely, so every second one carries the same path at a
+        quarter of the DTW cost.
+    term_weights : sequence of float
+        Candidate weights of each further term of ``method="combined"`` (default
+        0, 0.25, 0.5, 1).
 
     Attributes
     ----------
@@ -763,18 +799,22 @@ class MotionClassifier(_NearestSequences):
     window_seconds_ : float — the window of the per-frame descriptions, seconds.
     weights_ : dict — weight of each DTW cost in the sum (already divided by its scale).
     scales_ : dict — median training cost of each term.
-    segment_weight_ : float — ``w`` of ``method="combined"``.
+    term_weights_ : dict — the chosen weight of each term (1 for the first).
+    segment_weight_ : float — ``w_s`` of ``method="combined"``.
+    inner_accuracy_ : dict — inner leave-one-group-out accuracy of each candidate
+        ``(w_s, w_v, w_d)``.
     classes_ : the labels seen in ``fit``.
     """
 
     def __init__(
         self,
         model_params: Mapping[str, Any] | None = None,
-        method: str = "combined",
-        window: float = 1.0,
-        band: float | None = None,
-        n_neighbors: int = 1,
-        step: int = 2,
+        method: str = _DEFAULTS["method"],
+        window: float = _DEFAULTS["window"],
+        band: float | None = _DEFAULTS["band"],
+        n_neighbors: int = _DEFAULTS["n_neighbors"],
+        step: int = _DEFAULTS["step"],
+        term_weights: Sequence[float] = _DEFAULTS["term_weights"],
     ) -> None:
         self.model_params = model_params
         self.method = method
@@ -782,26 +822,22 @@ class MotionClassifier(_NearestSequences):
         self.band = band
         self.n_neighbors = n_neighbors
         self.step = step
+        self.term_weights = term_weights
 
     def _terms(self) -> tuple[str, ...]:
-        return ("coordinates", "segments") if self.method == "combined" else (self.method,)
+        return COMBINED_TERMS if self.method == "combined" else (self.method,)
 
     def _fit_features(self, trials: list[Trial]) -> None:
-        if self.method not in MOTION_METHODS:
-            raise ValueError(
-                f"method must be one of {', '.join(MOTION_METHODS)}, got {self.method!r}"
-            )
-        w = self.window
-        if not (isinstance(w, (int, float)) and not isinstance(w, bool) and 0 < w < np.inf):
-            raise ValueError(f"window must be a positive finite multiple, got {self.window!r}")
-        if not (isinstance(self.step, (int, np.integer)) and self.step >= 1):
-            raise ValueError(f"step must be a whole number of frames >= 1, got {self.step!r}")
+        for p in params.CLASSIFIER_PARAMETERS:
+            why = p.check(getattr(self, p.name))
+            if why is not None:
+                raise ValueError(f"MotionClassifier {p.name}={getattr(self, p.name)!r}: {why}")
         self.model_ = PrimitiveModel(**dict(self.model_params or {})).fit(trials)
         durations = self.model_.segment_ends_ - self.model_.segment_starts_
         self.window_seconds_ = float(self.window) * float(np.median(durations))
 
-    def _features(self, trials: list[Trial]) -> dict[str, list[NDArray[np.float64]]]:
-        out: dict[str, list[NDArray[np.float64]]] = {}
+    def _features(self, trials: list[Trial]) -> dict[str, Any]:
+        out: dict[str, Any] = {}
         for term in self._terms():
             if term == "frames":
                 out[term] = reconstructed_directions(
@@ -811,9 +847,18 @@ class MotionClassifier(_NearestSequences):
                 out[term] = primitive_coordinates(
                     self.model_, trials, self.window_seconds_, self.step
                 )
+            elif term == "velocity":
+                out[term] = [arm_velocities(t) for t in trials]
+            elif term == "duration":
+                out[term] = trials
             else:
                 out[term] = self._segment_projections(trials)
         return out
+
+    def _costs(self, term: str, queries: Any, references: Any | None = None) -> NDArray[np.float64]:
+        if term == "duration":
+            return duration_costs(queries, references)
+        return dtw_matrix(queries, references, band=self.band)
 
     def _segment_projections(self, trials: list[Trial]) -> list[NDArray[np.float64]]:
         corpus = self.model_.prepare(trials, tune_seg2=False)
@@ -834,8 +879,8 @@ class MotionClassifier(_NearestSequences):
         """Learn the primitives from ``movements`` and keep them with their labels ``y``.
 
         ``groups`` (optional, one per movement: subject, style, ...) is only used to choose
-        the segment weight of ``method="combined"`` by leave-one-group-out on these
-        movements; without it, leave-one-out.
+        the weights of ``method="combined"`` by leave-one-group-out on these movements;
+        without it, leave-one-out.
         """
         if self.method == "histogram":
             trials = self._fit_common(movements, y)
@@ -848,29 +893,33 @@ class MotionClassifier(_NearestSequences):
         n = self.train_labels_.shape[0]
         self.scales_ = {t: 1.0 for t in terms}
         self.weights_ = {terms[0]: 1.0}
+        self.term_weights_ = {terms[0]: 1.0}
         if self.method != "combined":
             return self
-        train = {t: dtw_matrix(self.train_features_[t], band=self.band) for t in terms}
-        off = ~np.eye(n, dtype=bool)
-        for t in terms:
-            m = float(np.median(train[t][off]))
-            self.scales_[t] = m if m > 0 else 1.0
         g = np.arange(n) if groups is None else np.asarray(list(groups))
         if g.shape[0] != n:
             raise ValueError(f"fit: {n} movements but {g.shape[0]} groups")
-        a = train[terms[0]] / self.scales_[terms[0]]
-        b = train[terms[1]] / self.scales_[terms[1]]
-        scores = [_inner_accuracy(a + w * b, self.train_labels_, g) for w in SEGMENT_WEIGHTS]
-        self.segment_weight_ = float(SEGMENT_WEIGHTS[int(np.argmax(scores))])
-        self.inner_accuracy_ = dict(zip(SEGMENT_WEIGHTS, scores, strict=True))
-        self.weights_ = {
-            terms[0]: 1.0 / self.scales_[terms[0]],
-            terms[1]: self.segment_weight_ / self.scales_[terms[1]],
-        }
+        off = ~np.eye(n, dtype=bool)
+        train = {}
+        for t in terms:
+            c = self._costs(t, self.train_features_[t])
+            m = float(np.median(c[off])) if n > 1 else 0.0
+            self.scales_[t] = m if m > 0 else 1.0
+            train[t] = c / self.scales_[t]
+        grid = [tuple(float(w) for w in ws) for ws in product(self.term_weights, repeat=3)]
+        scores = []
+        for ws in grid:
+            d = train[terms[0]] + sum(w * train[t] for w, t in zip(ws, terms[1:], strict=True))
+            scores.append(_inner_accuracy(d, self.train_labels_, g))
+        best = grid[int(np.argmax(scores))]
+        self.inner_accuracy_ = dict(zip(grid, scores, strict=True))
+        self.term_weights_ = {terms[0]: 1.0, **dict(zip(terms[1:], best, strict=True))}
+        self.segment_weight_ = self.term_weights_["segments"]
+        self.weights_ = {t: w / self.scales_[t] for t, w in self.term_weights_.items()}
         return self
 
     def distances(self, movements: Sequence[Trial]) -> NDArray[np.float64]:
-        """(n_movements, n_training) weighted DTW costs to the training movements."""
+        """(n_movements, n_training) weighted costs to the training movements."""
         trials = self._query(movements)
         if self.method == "histogram":
             raise ValueError("method='histogram' compares histograms, not distances")
@@ -878,7 +927,7 @@ class MotionClassifier(_NearestSequences):
         total = np.zeros((len(trials), self.train_labels_.shape[0]))
         for term, w in self.weights_.items():
             if w:
-                total += w * dtw_matrix(feats[term], self.train_features_[term], band=self.band)
+                total += w * self._costs(term, feats[term], self.train_features_[term])
         return total
 
     def predict(self, movements: Sequence[Trial]) -> NDArray[Any]:

@@ -28,8 +28,11 @@ from dataclasses import dataclass, field
 from typing import Any, Literal
 
 __all__ = [
+    "CLASSIFIER_PARAMETERS",
+    "COMBINED_TERMS",
     "DEG2_PER_RAD2",
     "FEATURES",
+    "MOTION_METHODS",
     "OFFSETS",
     "PAPER",
     "PARAMETERS",
@@ -37,6 +40,7 @@ __all__ = [
     "SHORT_POLICIES",
     "SHORT_POLICY",
     "STUDY_FRAME_PERIOD_S",
+    "TERM_WEIGHTS",
     "TUNINGS",
     "Parameter",
     "check_params",
@@ -364,6 +368,76 @@ def check_params(params: Mapping[str, Any], owner: str = "PrimitiveModel") -> No
         why = p.check(value)
         if why is not None:
             raise ValueError(f"{owner} parameter {name}={value!r}: {why}")
+
+
+# ---------------------------------------------------------------------------- classifier
+
+#: Descriptions :class:`~visprim.classify.MotionClassifier` compares movements by.
+MOTION_METHODS: tuple[str, ...] = ("combined", "frames", "coordinates", "segments", "histogram")
+#: The DTW costs summed by ``MotionClassifier(method="combined")``, in order; the first has
+#: weight 1, each other one of :data:`TERM_WEIGHTS` (chosen in ``fit``).
+COMBINED_TERMS: tuple[str, ...] = ("coordinates", "segments", "velocity", "duration")
+#: Candidate weights of each further term of ``method="combined"`` (each cost already divided
+#: by its median over pairs of training movements); ``fit`` picks them by leave-one-group-out
+#: on the training groups.
+TERM_WEIGHTS: tuple[float, ...] = (0.0, 0.25, 0.5, 1.0)
+
+
+def _weights(v: Any) -> bool:
+    try:
+        items = tuple(v)
+    except TypeError:
+        return False
+    return bool(items) and all(_is_real(w) and float(w) >= 0 for w in items)
+
+
+#: The settings of :class:`~visprim.classify.MotionClassifier` (its constructor's
+#: defaults are these; ``model_params`` are :data:`PARAMETERS`).
+CLASSIFIER_PARAMETERS: tuple[Parameter, ...] = (
+    _P(
+        "method",
+        "combined",
+        options(MOTION_METHODS),
+        "what movements are compared by (see MotionClassifier)",
+        "--method",
+        "MotionClassifier method",
+        choices=MOTION_METHODS,
+    ),
+    _P(
+        "window",
+        1.0,
+        real(0.0, open_low=True, unit="(median segment durations)"),
+        "window of the per-frame descriptions, a multiple of the median training segment duration",
+        None,
+    ),
+    _P(
+        "band",
+        None,
+        Constraint(
+            lambda v: v is None or (_is_real(v) and 0.0 <= float(v) <= 1.0),
+            "must be None (no band) or a fraction in [0, 1]",
+        ),
+        "Sakoe-Chiba band of the DTW, a fraction of the length",
+        "--band",
+        "Sakoe-Chiba band of the DTW, fraction of the length",
+    ),
+    _P("n_neighbors", 1, integer(1), "training movements voting", None),
+    _P(
+        "step",
+        2,
+        integer(1),
+        "the per-frame descriptions are taken at every step-th frame",
+        "--step",
+        "per-frame descriptions at every STEP-th frame",
+    ),
+    _P(
+        "term_weights",
+        TERM_WEIGHTS,
+        Constraint(_weights, "must be a non-empty sequence of finite numbers >= 0"),
+        "candidate weights of each further DTW cost of method='combined'",
+        None,
+    ),
+)
 
 
 # ---------------------------------------------------------------------------- reader options

@@ -7,6 +7,10 @@ import sys
 from typing import Any
 
 from visprim.cli import common
+from visprim.params import CLASSIFIER_PARAMETERS
+
+#: The classifier's settings by name (their defaults are the options' defaults).
+_CLF = {p.name: p for p in CLASSIFIER_PARAMETERS}
 
 
 def run(args: argparse.Namespace) -> int:
@@ -96,20 +100,21 @@ def register(sub: Any) -> None:
     p.add_argument(
         "--method",
         choices=METHODS,
-        default="combined",
-        help="MotionClassifier method (default combined; see help(visprim.MotionClassifier))",
+        default=_CLF["method"].default,
+        help=f"MotionClassifier method (default {_CLF['method'].default}; see "
+        "help(visprim.MotionClassifier))",
     )
     p.add_argument(
         "--band",
         type=float,
-        default=None,
+        default=_CLF["band"].default,
         help="Sakoe-Chiba band of the DTW, fraction of the length (default: none)",
     )
     p.add_argument(
         "--step",
         type=int,
-        default=2,
-        help="per-frame descriptions at every STEP-th frame (default 2)",
+        default=_CLF["step"].default,
+        help=f"per-frame descriptions at every STEP-th frame (default {_CLF['step'].default})",
     )
     p.add_argument(
         "--arm",
