@@ -481,6 +481,7 @@ READ_OPTIONS: Mapping[str, ReadOption] = {
         ReadOption("resample", None),
         ReadOption("repetitions", None),
         ReadOption("mirror", False, ("bvh", "amc", "c3d", "amass", "trc", "video")),
+        ReadOption("person", None, ("video",)),
     )
 }
 

@@ -288,8 +288,15 @@ def add_reader_options(p: argparse.ArgumentParser, *, many: bool = True) -> None
         "--on-gap",
         choices=ON_GAP,
         default=None,
-        help="C3D gaps longer than 0.2 s: split the recording (default), keep the longest "
-        "piece, or stop with an error",
+        help="gaps longer than 0.2 s (C3D markers, video and TRC keypoints): split the "
+        "recording (default), keep the longest piece, or stop with an error",
+    )
+    g.add_argument(
+        "--person",
+        type=_typed(int, lambda v: v >= 0, "a person number (0, 1, ...)"),
+        default=None,
+        help="videos with several people: follow person N, numbered from 0 by size, largest "
+        "first (default: the largest)",
     )
     if not many:
         return
@@ -349,7 +356,7 @@ def reader_options(args: argparse.Namespace, *, allow_each: bool = False) -> dic
         each = ", or 'each' to learn one-arm primitives from both" if allow_each else ""
         raise UsageError(f"--arm: {exc}{each}") from None
     opts: dict[str, Any] = {"arm": arm}
-    for name in ("skeleton", "rate", "preset", "mapping", "up_axis"):
+    for name in ("skeleton", "rate", "preset", "mapping", "up_axis", "person"):
         value = getattr(args, name, None)
         if value is not None:
             opts[name] = value

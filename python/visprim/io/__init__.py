@@ -157,6 +157,7 @@ def read_pieces(
     resample: float | None = _D["resample"],
     repetitions: int | None = _D["repetitions"],
     mirror: bool = _D["mirror"],
+    person: int | None = _D["person"],
 ) -> list[Trial]:
     """Read one recording as a list of trials (several when long gaps split it).
 
@@ -188,6 +189,8 @@ def read_pieces(
     repetitions : ``Trial.repetitions`` (default 1; CSV: the file's value)
     mirror : reflect left ↔ right so that a left arm looks like a right arm (for the
         right-arm angle convention); default False
+    person : video only: which person to follow when several are in view, numbered from 0,
+        largest first (default: the largest; see :mod:`visprim.io.video`)
     """
     p = Path(path)
     fmt = _format_of(p)
@@ -205,6 +208,7 @@ def read_pieces(
         "preset": preset,
         "up_axis": up_axis,
         "mirror": mirror or None,
+        "person": person,
     }
     for name, value in given.items():
         formats = _FORMAT_OPTIONS[name]
@@ -216,6 +220,7 @@ def read_pieces(
         raise ValueError(f"markers='file' applies to C3D files, not {p.name}")
     if repetitions is not None and int(repetitions) < 1:
         raise ValueError(f"repetitions must be >= 1, got {repetitions!r}")
+    check_person(person)
     if resample is not None:
         check_resample_period(resample)
 
@@ -226,7 +231,9 @@ def read_pieces(
 
         gaps = {"max_gap": max_gap, "on_gap": on_gap, "gap_method": gap_method}
         gaps["min_duration"] = min_duration
-        trials = read_keypoint_file(p, fmt, arm, mapping, up_axis, mirror, repetitions, gaps)
+        trials = read_keypoint_file(
+            p, fmt, arm, mapping, up_axis, mirror, repetitions, gaps, person=person
+        )
     else:
         if arm == "both" and mirror:
             raise ValueError(
@@ -325,6 +332,7 @@ def read(
     resample: float | None = _D["resample"],
     repetitions: int | None = _D["repetitions"],
     mirror: bool = _D["mirror"],
+    person: int | None = _D["person"],
 ) -> Trial:
     """Read one recording as one :class:`~visprim.trial.Trial`.
 
@@ -512,6 +520,15 @@ def _check_options(options: Mapping[str, Any]) -> None:
     reps = options.get("repetitions")
     if reps is not None and int(reps) < 1:
         raise ValueError(f"repetitions must be >= 1, got {reps!r}")
+    check_person(options.get("person"))
+
+
+def check_person(person: Any) -> None:
+    """``person=`` is None or a person number >= 0 (ValueError otherwise)."""
+    if person is not None and (
+        isinstance(person, bool) or not isinstance(person, (int, np.integer)) or person < 0
+    ):
+        raise ValueError(f"person must be None or an integer >= 0, got {person!r}")
 
 
 def _read_arm(p: Path, fmt: str, arm: str, **kw: Any) -> list[ArmRecording]:

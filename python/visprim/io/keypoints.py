@@ -494,9 +494,11 @@ def read_keypoint_file(
     mirror: bool,
     repetitions: int | None,
     gaps: Mapping[str, Any],
+    *,
+    person: int | None = None,
 ) -> list[Trial]:
     """:func:`visprim.io.read_pieces` for keypoint files: ``fmt`` ``"trc"``
-    (:mod:`visprim.io.trc`) or ``"video"`` (:mod:`visprim.io.video`)."""
+    (:mod:`visprim.io.trc`) or ``"video"`` (:mod:`visprim.io.video`, following ``person``)."""
     if fmt == "trc":
         from visprim.io.trc import read_trc_pieces
 
@@ -504,7 +506,7 @@ def read_keypoint_file(
     else:
         from visprim.io.video import read_video_pieces
 
-        trials = read_video_pieces(path, arm, mirror=mirror, **gaps)
+        trials = read_video_pieces(path, arm, mirror=mirror, person=person, **gaps)
     if repetitions is not None:
         for tr in trials:
             tr.repetitions = int(repetitions)
