@@ -17,6 +17,7 @@ from visprim.rate.descriptions import (
     POSTURES,
     RATE_K,
     RATE_M,
+    RATE_Q,
     RESIDUAL_K,
     Codebook,
     bridge_lines,
@@ -191,44 +192,27 @@ def _score(
     )
 
 
-def _fold(
-    train: Sequence[Trial],
-    test: Sequence[Trial],
-    group: str,
-    params: dict[str, Any],
-    families: Sequence[str],
-    *,
-    centres: str,
-    max_stroke: float | None,
-    rows: list[dict[str, Any]],
-    posture_mode: str = "mean",
-) -> None:
+def _prepare(
+    train: Sequence[Trial], test: Sequence[Trial], params: dict[str, Any]
+) -> tuple[Any, Any, Any]:
+    """The segmenting model, the training corpus (SEG-2 constant tuned on it) and the
+    held-out corpus (segmented with that constant) of one fold."""
     from visprim.model import PrimitiveModel
-    from visprim.vectors import to_curves, to_vectors
 
     params = {**params, "offsets": "mean", "features": "directions"}
     seg_model = PrimitiveModel(**params)
     train_corpus = seg_model.prepare(list(train), tune_seg2=True, segmentation="seg2")
-    n = int(seg_model.n_samples)
-    train_sv, _ = _corpus_vectors(train_corpus, n, max_stroke)
-    if train_sv is None:
-        raise ValueError(f"held-out group {group!r}: no SEG-2 segment in the training groups")
     test_model = PrimitiveModel(**{**params, "seg2_threshold": train_corpus.seg2_threshold})
     corpus = test_model.prepare(list(test), tune_seg2=False, segmentation="seg2")
-    sv, segs = _corpus_vectors(corpus, n, max_stroke)
-    if sv is None:
-        return
-    x, posture = sv.vectors, sv.offsets
-    ks = sorted(set(RATE_K) | {RESIDUAL_K})
-    book = fit_codebook(
-        train_sv.vectors,
-        ks,
-        n_components=int(seg_model.n_components),
-        centres=centres,
-        n_init=3,
-        seed=int(seg_model.seed),
-    )
-    c = posture.shape[1]
+    return seg_model, train_corpus, corpus
+
+
+def held_out_movements(
+    corpus: Any, group: str, segs: Sequence[NDArray[np.float64]]
+) -> list[HeldOut]:
+    """The held-out movements of a prepared ``corpus`` over the span their segments
+    ``segs`` (one ``(N, 2)`` array per trial) cover; trials without a segment are left out,
+    and each movement's ``rows`` index its segments in the order of ``segs``."""
     per_trial = np.split(corpus.values, corpus.offsets[1:])
     movements: list[HeldOut] = []
     row = 0
@@ -249,6 +233,53 @@ def _fold(
             )
         )
         row += s.shape[0]
+    return movements
+
+
+def _fold(
+    train: Sequence[Trial],
+    test: Sequence[Trial],
+    group: str,
+    params: dict[str, Any],
+    families: Sequence[str],
+    *,
+    centres: str,
+    max_stroke: float | None,
+    rows: list[dict[str, Any]],
+    posture_mode: str = "mean",
+    prepared: dict[str, Any] | None = None,
+) -> None:
+    """Score ``families`` on the held-out ``test`` trials of ``group`` with everything
+    learned from ``train``, appending to ``rows``. ``prepared`` (a dict kept by the caller)
+    caches the SEG-2-segmented corpora of this fold under ``group``: the settings tried on
+    one fold (posture, max stroke) share them."""
+    from visprim.vectors import to_curves, to_vectors
+
+    cached = None if prepared is None else prepared.get(group)
+    if cached is None:
+        cached = _prepare(train, test, params)
+        if prepared is not None:
+            prepared[group] = cached
+    seg_model, train_corpus, corpus = cached
+    n = int(seg_model.n_samples)
+    train_sv, _ = _corpus_vectors(train_corpus, n, max_stroke)
+    if train_sv is None:
+        raise ValueError(f"held-out group {group!r}: no SEG-2 segment in the training groups")
+    sv, segs = _corpus_vectors(corpus, n, max_stroke)
+    if sv is None:
+        return
+    x, posture = sv.vectors, sv.offsets
+    ks = sorted(set(RATE_K) | {RESIDUAL_K})
+    book = fit_codebook(
+        train_sv.vectors,
+        ks,
+        n_components=int(seg_model.n_components),
+        centres=centres,
+        n_init=3,
+        seed=int(seg_model.seed),
+    )
+    c = posture.shape[1]
+    movements = held_out_movements(corpus, group, segs)
     # Bridges: each segment's shape less the line between its end postures (unit bone
     # directions, what is stored), rebuilt from primitives of such shapes.
     absolute = to_curves(x, c) + posture[:, None, :]
@@ -272,6 +303,7 @@ def _fold(
             "nearest+gain": RATE_K,
             "warp": RATE_K,
             "residual": m_values,
+            "nearest+dct": RATE_Q,
             "projection": m_values,
             "bridge": RATE_K,
             "bridge+gain": RATE_K,
@@ -280,7 +312,10 @@ def _fold(
         bridged = family.startswith("bridge")
         centers = bridge[0].centers if bridged and bridge is not None else book.centers
         for p in params_of:
-            if family not in ("residual", "projection", "bridge+residual") and p not in centers:
+            if (
+                family not in ("residual", "projection", "bridge+residual", "nearest+dct")
+                and p not in centers
+            ):
                 continue
             inner = _BRIDGE_INNER.get(family, family)
             if bridged and bridge is not None:
@@ -382,6 +417,32 @@ def evaluate_rate(
     return result
 
 
+def read_benchmarks(
+    sources: Iterable[str | os.PathLike[str]],
+    labels: str | os.PathLike[str] | None,
+    group_by: str | None,
+    period: float,
+    jobs: int | None,
+    disable: bool,
+) -> list[Any]:
+    """The :class:`visprim.evaluate.Benchmark` s found under ``sources`` (as ``visprim
+    evaluate`` finds them, :func:`visprim.evaluate.find_recordings`), read with a progress
+    bar unless ``disable``."""
+    from tqdm.auto import tqdm
+
+    from visprim.evaluate import find_recordings, make_benchmarks, read_movements
+
+    recordings, _ = find_recordings(sources, labels)
+    if not recordings:
+        raise ValueError("no labelled recordings found (labels.tsv beside the data, or --labels)")
+    with tqdm(total=len(recordings), desc="reading", unit="file", disable=disable) as bar:
+        read_out, _ = read_movements(recordings, period=period, jobs=jobs, on_progress=bar.update)
+    recordings = [r for r, t in zip(recordings, read_out, strict=True) if t is not None]
+    movements = [t for t in read_out if t is not None]
+    benches, _ = make_benchmarks(recordings, movements, group_by=group_by)
+    return list(benches)
+
+
 def rate_benchmark(
     sources: Iterable[str | os.PathLike[str]],
     *,
@@ -399,18 +460,10 @@ def rate_benchmark(
     ``visprim evaluate`` finds them, :func:`visprim.evaluate.find_recordings`)."""
     from tqdm.auto import tqdm
 
-    from visprim.evaluate import find_recordings, make_benchmarks, read_movements
     from visprim.progress import _disable
 
-    disable = _disable() if progress is None else not progress
-    recordings, _ = find_recordings(sources, labels)
-    if not recordings:
-        raise ValueError("no labelled recordings found (labels.tsv beside the data, or --labels)")
-    with tqdm(total=len(recordings), desc="reading", unit="file", disable=disable) as bar:
-        read_out, _ = read_movements(recordings, period=period, jobs=jobs, on_progress=bar.update)
-    recordings = [r for r, t in zip(recordings, read_out, strict=True) if t is not None]
-    movements = [t for t in read_out if t is not None]
-    benches, _ = make_benchmarks(recordings, movements, group_by=group_by)
+    disable = bool(_disable()) if progress is None else not progress
+    benches = read_benchmarks(sources, labels, group_by, period, jobs, disable)
     n_folds = sum(len(set(b.groups.tolist())) for b in benches)
     out = []
     with tqdm(total=n_folds, desc="rate-distortion", unit="fold", disable=disable) as bar:

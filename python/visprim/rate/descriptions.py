@@ -22,6 +22,7 @@ FAMILIES: tuple[str, ...] = (
     "residual",
     "projection",
     "warp",
+    "nearest+dct",
     "bridge",
     "bridge+gain",
     "bridge+residual",
@@ -42,6 +43,10 @@ WARP_GRID: NDArray[np.float64] = np.linspace(-0.8, 0.8, 9)
 WARP_CANDIDATES = 5
 #: k of the residual descriptions (the model's default number of primitives).
 RESIDUAL_K = 30
+#: DCT coefficients per channel q of the ``nearest+dct`` descriptions.
+RATE_Q: tuple[int, ...] = (1, 2, 3, 4, 6)
+#: Shape channels of a one-arm segment: the two bone directions' coordinates.
+SHAPE_CHANNELS = 6
 
 
 # ---------------------------------------------------------------------------- counting
@@ -51,7 +56,8 @@ def segment_numbers(family: str, n_channels: int, m: int = 0) -> int:
     """Numbers stored per segment by a primitive description of ``family``: the primitive
     id, the duration and ``n_channels`` posture numbers, plus a gain (``nearest+gain``),
     ``m`` coefficients (``residual``), or a gain and one warp number (``warp``);
-    ``projection`` stores ``m`` coefficients, the duration and the posture (no id).
+    ``projection`` stores ``m`` coefficients, the duration and the posture (no id);
+    ``nearest+dct`` stores ``m`` DCT coefficients of each of the 6 shape channels.
     ``bridge`` descriptions store no posture per segment (their boundary postures are
     counted by :func:`movement_numbers`): the id and duration, plus a gain or ``m``
     coefficients."""
@@ -64,6 +70,8 @@ def segment_numbers(family: str, n_channels: int, m: int = 0) -> int:
         return base + int(m)
     if family == "warp":
         return base + 2
+    if family == "nearest+dct":
+        return base + int(m) * SHAPE_CHANNELS
     if family == "projection":
         return 1 + int(n_channels) + int(m)
     if family == "bridge":
@@ -207,6 +215,25 @@ def warp_curves(curves: NDArray[np.float64], w: float) -> NDArray[np.float64]:
     return curves[..., i0, :] * (1.0 - frac) + curves[..., i0 + 1, :] * frac
 
 
+def dct_residual(
+    vectors: NDArray[np.float64], predicted: NDArray[np.float64], n_channels: int, q: int
+) -> NDArray[np.float64]:
+    """``predicted`` segment vectors ``(N, d)`` corrected by the first ``q`` non-constant
+    orthonormal DCT-II coefficients of each channel of their residual ``vectors −
+    predicted`` along the segment's samples (the constant term is left out: both are
+    posture-relative, so the residual's mean is what the posture already stores)."""
+    from scipy.fft import dct, idct
+
+    from visprim.vectors import to_curves, to_vectors
+
+    r = to_curves(vectors - predicted, n_channels)  # (N, n, C)
+    c = dct(r, type=2, norm="ortho", axis=1)
+    keep = np.zeros(c.shape[1], dtype=bool)
+    keep[1 : 1 + int(q)] = True
+    c[:, ~keep, :] = 0.0
+    return np.asarray(predicted + to_vectors(idct(c, type=2, norm="ortho", axis=1)))
+
+
 def rebuild_segments(
     book: Codebook,
     vectors: NDArray[np.float64],
@@ -229,6 +256,10 @@ def rebuild_segments(
         m = min(int(param), book.n_components)
         e = book.components[:, :m]
         return np.asarray(centre + ((vectors - centre) @ e) @ e.T)
+    if family == "nearest+dct":
+        k = RESIDUAL_K if RESIDUAL_K in book.centers else max(book.centers)
+        centre = book.centers[k][book.nearest(vectors, k)[:, 0]]
+        return dct_residual(vectors, centre, n_channels, int(param))
     k = int(param)
     if family in ("nearest", "nearest+gain"):
         rebuilt = book.centers[k][book.nearest(vectors, k)[:, 0]].copy()
