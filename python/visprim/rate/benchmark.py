@@ -332,7 +332,11 @@ def _fold(
             for mv in movements:
                 values = on_clock(curves[mv.rows], mv.segments, mv.times)
                 n_post = c if bridged or posture_mode == "mean" else c // 3 * 2
-                numbers = movement_numbers(family, mv.segments.shape[0], n_post, p)
+                numbers = (
+                    movement_numbers(family, mv.segments.shape[0], n_post, q=p)
+                    if family == "nearest+dct"
+                    else movement_numbers(family, mv.segments.shape[0], n_post, p)
+                )
                 _score(rows, mv, family, p, numbers, directions=values)
 
 

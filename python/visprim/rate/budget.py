@@ -10,7 +10,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from visprim.rate.descriptions import movement_numbers
+from visprim.rate.descriptions import dct_residual, movement_numbers
+
+#: Most DCT coefficients per channel of the residual among the candidates.
+DCT_Q_MAX = 6
 
 # ---------------------------------------------------------------------------- one movement
 
@@ -18,12 +21,15 @@ from visprim.rate.descriptions import movement_numbers
 @dataclass(frozen=True)
 class Description:
     """The description chosen for one movement's segments: ``family`` (:data:`FAMILIES`),
-    its ``m`` coefficients, the ``numbers`` it stores and the ``seconds`` it covers."""
+    its ``m`` coefficients, the ``numbers`` it stores and the ``seconds`` it covers, and
+    ``q`` DCT coefficients per channel of the residual (``nearest+dct``,
+    ``residual+dct``)."""
 
     family: str
     m: int
     numbers: int
     seconds: float
+    q: int = 0
 
     @property
     def numbers_per_s(self) -> float:
@@ -31,6 +37,12 @@ class Description:
 
     @property
     def label(self) -> str:
+        if self.family == "nearest+dct":
+            return f"nearest primitive + {self.q} DCT coefficient(s) per channel"
+        if self.family == "residual+dct":
+            return (
+                f"nearest primitive + {self.m} residual + {self.q} DCT coefficient(s) per channel"
+            )
         if self.family == "residual":
             return f"nearest primitive + {self.m} residual coefficient(s)"
         if self.family == "projection":
@@ -44,6 +56,7 @@ class Description:
             "description": self.label,
             "family": self.family,
             "coefficients": self.m,
+            "dct_coefficients_per_channel": self.q,
             "numbers": self.numbers,
             "seconds": self.seconds,
             "numbers_per_s": self.numbers_per_s,
@@ -64,6 +77,7 @@ def _candidates(
     p = model.transform(x)
     labels, _ = model.assign(p)
     centre = model.cluster_centers_[labels]
+    c = int(model.n_channels)
 
     def rebuild(d: Description) -> NDArray[np.float64]:
         if d.family == "projection":
@@ -73,13 +87,19 @@ def _candidates(
         out = np.asarray(coef @ model.components_.T + model.mean_)
         if d.family == "nearest+gain":
             out = out * amplitude_gains(x, out)[:, None]
+        if d.q:
+            out = dct_residual(x, out, c, d.q, skip_constant=model.offsets == "mean")
         return out
 
-    options = [("nearest", 0)] + ([("nearest+gain", 0)] if model.offsets == "mean" else [])
-    options += [("residual", m) for m in range(1, f)] + [("projection", f)]
+    options = [("nearest", 0, 0)] + ([("nearest+gain", 0, 0)] if model.offsets == "mean" else [])
+    options += [("residual", m, 0) for m in range(1, f)] + [("projection", f, 0)]
+    q_max = min(DCT_Q_MAX, int(model.n_samples) - 1)
+    options += [("nearest+dct", 0, q) for q in range(1, q_max + 1)]
+    options += [("residual+dct", m, q) for m in range(1, f) for q in range(1, q_max + 1)]
     out = []
-    for fam, m in options:
-        d = Description(fam, m, movement_numbers(fam, n_seg, posture, m), float(seconds))
+    for fam, m, q in options:
+        numbers = movement_numbers(fam, n_seg, posture, m, q, c)
+        d = Description(fam, m, numbers, float(seconds), q)
         out.append((d, float(np.sum((x - rebuild(d)) ** 2))))
     return out, rebuild
 
@@ -98,7 +118,10 @@ def describe_segments(
     Without ``budget``: ``family`` (default the model's own, the nearest primitive, scaled
     by its gain if ``model.amplitude``; or ``"projection"``). With ``budget`` (numbers per
     second of movement): of the nearest primitive, with its gain, with m = 1 … f − 1
-    residual coefficients and the own projection (m = f), the one whose rebuild lies
+    residual coefficients, the own projection (m = f), and the nearest primitive (with
+    or without m residual coefficients) corrected by q = 1 … :data:`DCT_Q_MAX` DCT
+    coefficients per channel of what is left (:func:`~visprim.rate.descriptions.dct_residual`),
+    the one whose rebuild lies
     closest to the segments (squared error of the segment vectors) among those that fit
     the budget. Posture numbers are counted for posture-relative models
     (``offsets="mean"``); a model of absolute curves stores none.
@@ -136,15 +159,20 @@ def share_budget(
     fit ``budget × span``."""
     options = [_candidates(model, x, sec)[0] for x, sec in parts]
     total = budget * span * (1 + 1e-12)
+    # Every combination, as arrays over the grid of one choice per part.
+    numbers = np.zeros(())
+    errors = np.zeros(())
+    for o in options:
+        numbers = np.add.outer(numbers, [d.numbers for d, _ in o])
+        errors = np.add.outer(errors, [e for _, e in o])
+    fits = numbers <= total
     best: tuple[float, tuple[int, ...]] | None = None
-    # Two arms of at most f + 2 descriptions each: every combination is cheap to try.
-    for combo in np.ndindex(*(len(o) for o in options)):
-        numbers = sum(o[j][0].numbers for o, j in zip(options, combo, strict=True))
-        if numbers > total:
-            continue
-        err = sum(o[j][1] for o, j in zip(options, combo, strict=True))
-        if best is None or err < best[0]:
-            best = (err, tuple(combo))
+    if fits.any():
+        flat = int(np.argmin(np.where(fits, errors, np.inf)))
+        best = (
+            float(errors.flat[flat]),
+            tuple(int(i) for i in np.unravel_index(flat, errors.shape)),
+        )
     if best is None:
         least = sum(o[0][0].numbers for o in options) / span
         raise ValueError(

@@ -52,12 +52,16 @@ SHAPE_CHANNELS = 6
 # ---------------------------------------------------------------------------- counting
 
 
-def segment_numbers(family: str, n_channels: int, m: int = 0) -> int:
+def segment_numbers(
+    family: str, n_channels: int, m: int = 0, q: int = 0, shape_channels: int = SHAPE_CHANNELS
+) -> int:
     """Numbers stored per segment by a primitive description of ``family``: the primitive
     id, the duration and ``n_channels`` posture numbers, plus a gain (``nearest+gain``),
     ``m`` coefficients (``residual``), or a gain and one warp number (``warp``);
     ``projection`` stores ``m`` coefficients, the duration and the posture (no id);
-    ``nearest+dct`` stores ``m`` DCT coefficients of each of the 6 shape channels.
+    ``nearest+dct`` stores ``q`` DCT coefficients of each of the ``shape_channels``
+    channels of the segment's shape (6 for one arm's bone directions), and
+    ``residual+dct`` both ``m`` residual and ``q`` DCT coefficients per channel.
     ``bridge`` descriptions store no posture per segment (their boundary postures are
     counted by :func:`movement_numbers`): the id and duration, plus a gain or ``m``
     coefficients."""
@@ -71,7 +75,9 @@ def segment_numbers(family: str, n_channels: int, m: int = 0) -> int:
     if family == "warp":
         return base + 2
     if family == "nearest+dct":
-        return base + int(m) * SHAPE_CHANNELS
+        return base + int(q) * int(shape_channels)
+    if family == "residual+dct":
+        return base + int(m) + int(q) * int(shape_channels)
     if family == "projection":
         return 1 + int(n_channels) + int(m)
     if family == "bridge":
@@ -87,12 +93,19 @@ def segment_numbers(family: str, n_channels: int, m: int = 0) -> int:
 BOUNDARY_NUMBERS = 4
 
 
-def movement_numbers(family: str, n_segments: int, n_channels: int, m: int = 0) -> int:
+def movement_numbers(
+    family: str,
+    n_segments: int,
+    n_channels: int,
+    m: int = 0,
+    q: int = 0,
+    shape_channels: int = SHAPE_CHANNELS,
+) -> int:
     """All the numbers of one movement of ``n_segments`` consecutive segments: its start
     time, each segment's numbers (:func:`segment_numbers`) and, for the ``bridge``
     descriptions, the posture at each of the ``n_segments + 1`` boundaries (two unit bone
     directions, :data:`BOUNDARY_NUMBERS`)."""
-    total = 1 + int(n_segments) * segment_numbers(family, n_channels, m)
+    total = 1 + int(n_segments) * segment_numbers(family, n_channels, m, q, shape_channels)
     if family.startswith("bridge"):
         total += BOUNDARY_NUMBERS * (int(n_segments) + 1)
     return total
@@ -216,12 +229,17 @@ def warp_curves(curves: NDArray[np.float64], w: float) -> NDArray[np.float64]:
 
 
 def dct_residual(
-    vectors: NDArray[np.float64], predicted: NDArray[np.float64], n_channels: int, q: int
+    vectors: NDArray[np.float64],
+    predicted: NDArray[np.float64],
+    n_channels: int,
+    q: int,
+    skip_constant: bool = True,
 ) -> NDArray[np.float64]:
     """``predicted`` segment vectors ``(N, d)`` corrected by the first ``q`` non-constant
     orthonormal DCT-II coefficients of each channel of their residual ``vectors −
     predicted`` along the segment's samples (the constant term is left out: both are
-    posture-relative, so the residual's mean is what the posture already stores)."""
+    posture-relative, so the residual's mean is what the posture already stores; with
+    ``skip_constant=False``, for absolute curves, the first ``q`` terms)."""
     from scipy.fft import dct, idct
 
     from visprim.vectors import to_curves, to_vectors
@@ -229,7 +247,8 @@ def dct_residual(
     r = to_curves(vectors - predicted, n_channels)  # (N, n, C)
     c = dct(r, type=2, norm="ortho", axis=1)
     keep = np.zeros(c.shape[1], dtype=bool)
-    keep[1 : 1 + int(q)] = True
+    first = 1 if skip_constant else 0
+    keep[first : first + int(q)] = True
     c[:, ~keep, :] = 0.0
     return np.asarray(predicted + to_vectors(idct(c, type=2, norm="ortho", axis=1)))
 
