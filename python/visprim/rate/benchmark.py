@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from visprim.params import RATE_OPTIONS
 from visprim.rate.descriptions import (
     BASELINE_RATES,
     FAMILIES,
@@ -170,13 +171,14 @@ def _score(
     numbers: int,
     directions: NDArray[np.float64] | None = None,
     angles: NDArray[np.float64] | None = None,
+    joint: bool = True,
 ) -> None:
     from visprim.features import from_angles, to_angles
 
     if directions is None:
         assert angles is not None
         directions = from_angles(angles, "directions")
-    if angles is None:
+    if angles is None and joint:
         angles = to_angles(directions, "directions", mv.times)
     rows.append(
         {
@@ -187,7 +189,9 @@ def _score(
             "numbers": int(numbers),
             "seconds": mv.seconds,
             "bone_deg": bone_rms_deg(directions, mv.directions),
-            "joint_deg": joint_rms_deg(angles, mv.angles, mv.rotations),
+            "joint_deg": (
+                joint_rms_deg(angles, mv.angles, mv.rotations) if angles is not None else np.nan
+            ),
         }
     )
 
@@ -248,11 +252,14 @@ def _fold(
     rows: list[dict[str, Any]],
     posture_mode: str = "mean",
     prepared: dict[str, Any] | None = None,
+    joint: bool = True,
 ) -> None:
     """Score ``families`` on the held-out ``test`` trials of ``group`` with everything
     learned from ``train``, appending to ``rows``. ``prepared`` (a dict kept by the caller)
     caches the SEG-2-segmented corpora of this fold under ``group``: the settings tried on
-    one fold (posture, max stroke) share them."""
+    one fold (posture, max stroke) share them. ``joint=False`` leaves the joint-space error
+    out (NaN) of the primitive descriptions' rows: the nested search scores only bone
+    directions."""
     from visprim.vectors import to_curves, to_vectors
 
     cached = None if prepared is None else prepared.get(group)
@@ -310,6 +317,8 @@ def _fold(
             "bridge+residual": m_values,
         }[family]
         bridged = family.startswith("bridge")
+        if family in ("residual", "nearest+dct") and not book.centers:
+            continue  # fewer training segments than the fewest primitives
         centers = bridge[0].centers if bridged and bridge is not None else book.centers
         for p in params_of:
             if (
@@ -337,7 +346,7 @@ def _fold(
                     if family == "nearest+dct"
                     else movement_numbers(family, mv.segments.shape[0], n_post, p)
                 )
-                _score(rows, mv, family, p, numbers, directions=values)
+                _score(rows, mv, family, p, numbers, directions=values, joint=joint)
 
 
 #: The primitive description that rebuilds a bridge's shape.
@@ -379,9 +388,9 @@ def evaluate_rate(
     bench: Any,
     *,
     families: Sequence[str] = FAMILIES,
-    centres: str = "projection",
-    max_stroke: float | None = None,
-    posture: str = "mean",
+    centres: str = RATE_OPTIONS["centres"].default,
+    max_stroke: float | None = RATE_OPTIONS["max_stroke"].default,
+    posture: str = RATE_OPTIONS["posture"].default,
     model_params: dict[str, Any] | None = None,
     on_fold: Callable[[str], None] | None = None,
 ) -> RateResult:
@@ -454,9 +463,9 @@ def rate_benchmark(
     group_by: str | None = None,
     period: float = 0.034,
     families: Sequence[str] = FAMILIES,
-    centres: str = "projection",
-    max_stroke: float | None = None,
-    posture: str = "mean",
+    centres: str = RATE_OPTIONS["centres"].default,
+    max_stroke: float | None = RATE_OPTIONS["max_stroke"].default,
+    posture: str = RATE_OPTIONS["posture"].default,
     jobs: int | None = None,
     progress: bool | None = None,
 ) -> list[RateResult]:

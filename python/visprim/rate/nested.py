@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from visprim.params import RATE_OPTIONS
 from visprim.rate.benchmark import (
     RateResult,
     _baseline,
@@ -29,9 +30,10 @@ from visprim.rate.benchmark import (
 from visprim.rate.report import best_within
 from visprim.trial import split_arms
 
-#: Settings searched by the inner folds: (posture mode, max stroke in seconds or None).
+#: Settings searched by the inner folds: (posture mode, max stroke in seconds or None), the
+#: values :data:`visprim.params.RATE_OPTIONS` declares.
 SEARCH: tuple[tuple[str, float | None], ...] = tuple(
-    (p, s) for p in ("mean", "unit") for s in (None, 1.2, 0.8, 0.6)
+    (p, s) for p in RATE_OPTIONS["posture"].searched for s in RATE_OPTIONS["max_stroke"].searched
 )
 #: Primitive descriptions searched (``warp`` and the bridges are left out: slower, and
 #: never the inner choice on HDM05 in the full benchmark at these budgets).
@@ -139,6 +141,7 @@ def nested_rate(
                     rows=r.rows,
                     posture_mode=posture,
                     prepared=prepared,
+                    joint=False,
                 )
             inner[(posture, stroke)] = r.summary()
         outer_rows: dict[tuple[str, float | None], list[dict[str, Any]]] = {}
