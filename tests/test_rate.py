@@ -160,6 +160,8 @@ def test_rate_benchmark_counts_and_report(tmp_path: Path) -> None:
         bench,
         families=["nearest", "projection", "dct-angles", "keyframes-directions"],
         model_params=SMALL_MODEL,
+        posture="mean",
+        max_stroke=None,
     )
     assert res.groups == ["g0", "g1", "g2"]
     rows = res.rows
