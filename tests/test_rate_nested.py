@@ -90,3 +90,22 @@ def test_nested_needs_three_groups() -> None:
     bench = make_benchmarks(recs, data)[0][0]
     with pytest.raises(ValueError, match="at least 3 groups"):
         nested_rate(bench, search=SEARCH, families=FAMILIES, model_params=SMALL_MODEL)
+
+
+def test_the_command_line_reads_the_declared_rate_settings() -> None:
+    import argparse
+
+    from visprim.cli.evaluate import _stroke, register
+    from visprim.params import RATE_OPTIONS
+
+    parser = argparse.ArgumentParser()
+    register(parser.add_subparsers())
+    args = parser.parse_args(["evaluate", "data"])
+    assert args.rate_posture == RATE_OPTIONS["posture"].default
+    assert args.max_stroke == RATE_OPTIONS["max_stroke"].default
+    assert args.rate_centres == RATE_OPTIONS["centres"].default and not args.rate_nested
+    assert parser.parse_args(["evaluate", "d", "--max-stroke", "none"]).max_stroke is None
+    assert _stroke("1.5") == 1.5
+    for bad in ("-1", "soon"):
+        with pytest.raises(argparse.ArgumentTypeError):
+            _stroke(bad)
