@@ -29,6 +29,9 @@ segment is rebuilt by a description (:data:`FAMILIES`):
     taken relative to the centre (m numbers more): with m = f this *is* the projection.
 ``projection``
     the segment's own first m PCA coefficients (no primitive id).
+``nearest+dct``
+    the nearest of 30 primitives corrected by the first q non-constant DCT-II coefficients
+    of each of the 6 shape channels of its residual (:func:`dct_residual`, 6 q numbers more).
 ``warp``
     the nearest primitive with its gain and a monotone time warp inside the segment,
     ``u → u + w u (1 − u)``, ``|w| < 1``, one number (:func:`warp_curves`), the primitive and
@@ -44,12 +47,21 @@ means of the members' full segment vectors (``centres="members"``, which keep wh
 eigenvectors drop); on HDM05 (leave one actor out) both rebuild within 0.2° of each other at
 every k, so the default stays the model's own. A segment's posture is stored as each
 channel's mean (``posture="mean"``, 6 numbers per arm) or as the two unit bone directions
-of that mean (``posture="unit"``, 4 numbers, :func:`unit_posture`).
-``max_stroke`` (seconds, default none) cuts every segment longer than that into equal parts,
+of that mean (``posture="unit"``, 4 numbers, :func:`unit_posture`, the default).
+``max_stroke`` (seconds, default 0.8) cuts every segment longer than that into equal parts,
 in training and held-out movements alike.
 
-Everything here is plain NumPy on a few hundred segments; the fits take well under a second
-per fold.
+The defaults (:data:`visprim.params.RATE_OPTIONS`) are the settings that the nested
+leave-one-group-out of :mod:`visprim.rate.nested` chose on HDM05 (docs/rate.rst).
+Modules: :mod:`~visprim.rate.descriptions` (what a description stores and rebuilds),
+:mod:`~visprim.rate.measures` (errors, keyframe and DCT baselines),
+:mod:`~visprim.rate.benchmark`, :mod:`~visprim.rate.nested`, :mod:`~visprim.rate.report`
+and :mod:`~visprim.rate.budget` (one movement within a budget, ``visprim imitate
+--budget``).
+
+Everything here is plain NumPy on a few hundred segments. On HDM05 the full benchmark
+takes about 10 s of CPU per fold (SEG-2 tuning and scoring every description), and
+``visprim evaluate --rate-only --rate-nested`` a few minutes in all on two cores.
 """
 
 from visprim.rate.benchmark import (
@@ -69,6 +81,7 @@ from visprim.rate.descriptions import (
     RATE_K,
     RATE_M,
     Codebook,
+    dct_residual,
     fit_codebook,
     movement_numbers,
     rebuild_segments,
@@ -78,6 +91,7 @@ from visprim.rate.descriptions import (
     warp_curves,
 )
 from visprim.rate.measures import bone_rms_deg, dct_rebuild, joint_rms_deg, keyframe_rebuild
+from visprim.rate.nested import NestedResult, nested_rate, nested_rate_benchmark
 from visprim.rate.report import best_within, rate_markdown, write_rate_report
 
 __all__ = [
@@ -90,16 +104,20 @@ __all__ = [
     "Codebook",
     "Description",
     "HeldOut",
+    "NestedResult",
     "RateResult",
     "best_within",
     "bone_rms_deg",
     "dct_rebuild",
+    "dct_residual",
     "describe_segments",
     "evaluate_rate",
     "fit_codebook",
     "joint_rms_deg",
     "keyframe_rebuild",
     "movement_numbers",
+    "nested_rate",
+    "nested_rate_benchmark",
     "on_clock",
     "rate_benchmark",
     "rate_markdown",

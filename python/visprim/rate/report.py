@@ -76,7 +76,8 @@ def rate_markdown(results: Sequence[RateResult]) -> str:
         "RMS: angle between the rebuilt and the held-out upper-arm and forearm directions; "
         "median over held-out one-arm movements (in brackets the lowest and highest median "
         "of one held-out group). Parameter: k primitives (nearest, warp), m coefficients "
-        "(residual, projection), target numbers / s (keyframes, dct)."
+        "(residual, projection), q DCT coefficients per channel (nearest+dct), target numbers "
+        "/ s (keyframes, dct)."
     )
     return "\n".join(out) + "\n"
 
