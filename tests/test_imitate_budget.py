@@ -50,11 +50,12 @@ def test_a_budget_picks_the_best_description_that_fits(data) -> None:
     assert d["numbers_per_s"] <= budget and d["budget_numbers_per_s"] == budget
     assert d["numbers"] > plain.metrics["description"]["numbers"]
     assert _err(mid) < _err(plain)
-    # An ample budget affords each segment's own projection, the closest of all.
+    # An ample budget affords the richest description, the primitive with residual and
+    # DCT coefficients: at least as close as each segment's own projection.
     ample = imitate(model, trial, play=False, budget=1e4)
-    assert ample.metrics["description"]["description"] == "own projection (8 coefficients)"
+    assert "DCT coefficient" in ample.metrics["description"]["description"]
     projection = imitate(model, trial, play=False, source="projection")
-    assert _err(ample) == pytest.approx(_err(projection))
+    assert _err(ample) <= _err(projection) + 1e-9
     assert _err(ample) <= _err(mid)
     with pytest.raises(ValueError, match="below the smallest description"):
         imitate(model, trial, play=False, budget=0.5 * rate)

@@ -160,6 +160,8 @@ def test_rate_benchmark_counts_and_report(tmp_path: Path) -> None:
         bench,
         families=["nearest", "projection", "dct-angles", "keyframes-directions"],
         model_params=SMALL_MODEL,
+        posture="mean",
+        max_stroke=None,
     )
     assert res.groups == ["g0", "g1", "g2"]
     rows = res.rows
@@ -209,7 +211,11 @@ def test_rate_benchmark_counts_and_report(tmp_path: Path) -> None:
         evaluate_rate(bench, families=["mean"])
     # Unit postures store 4 numbers a segment instead of 6; bridges their boundaries.
     unit = evaluate_rate(
-        bench, families=["nearest", "bridge"], model_params=SMALL_MODEL, posture="unit"
+        bench,
+        families=["nearest", "bridge"],
+        model_params=SMALL_MODEL,
+        posture="unit",
+        max_stroke=None,
     )
     for a, b in zip(
         [r for r in unit.rows if r["family"] == "nearest" and r["param"] == 10], near, strict=True

@@ -36,6 +36,7 @@ __all__ = [
     "OFFSETS",
     "PAPER",
     "PARAMETERS",
+    "RATE_OPTIONS",
     "SEGMENTATIONS",
     "SHORT_POLICIES",
     "SHORT_POLICY",
@@ -484,6 +485,52 @@ READ_OPTIONS: Mapping[str, ReadOption] = {
         ReadOption("person", None, ("video",)),
     )
 }
+
+
+# ---------------------------------------------------------------------------- rate benchmark
+
+
+@dataclass(frozen=True)
+class RateOption:
+    """One setting of the rate–distortion benchmark (:mod:`visprim.rate`, ``visprim
+    evaluate --rate``): its default, the values the nested leave-one-group-out searches
+    (:mod:`visprim.rate.nested`) and what it means."""
+
+    name: str
+    default: Any
+    searched: tuple[Any, ...]
+    help: str
+
+
+#: Every setting of the rate benchmark, declared once: the benchmark, its nested search and
+#: the command line read this. The defaults are the settings the nested leave-one-actor-out
+#: on HDM05 chose most often within 12 numbers per second (docs/rate.rst).
+RATE_OPTIONS: Mapping[str, RateOption] = {
+    o.name: o
+    for o in (
+        RateOption(
+            "posture",
+            "unit",
+            ("mean", "unit"),
+            "a segment's posture: its 6 channel means, or the 2 unit bone directions of that "
+            "mean (4 numbers)",
+        ),
+        RateOption(
+            "max_stroke",
+            0.8,
+            (None, 0.8),
+            "segments longer than this many seconds are cut into equal parts (None: never)",
+        ),
+        RateOption(
+            "centres",
+            "projection",
+            ("projection",),
+            "primitive centres: k-means centres in the projection space (the paper's) or the "
+            "means of the members' segment vectors ('members', within 0.2 degrees on HDM05)",
+        ),
+    )
+}
+
 
 # ---------------------------------------------------------------------------- video keypoints
 

@@ -7,7 +7,7 @@ import sys
 from typing import Any
 
 from visprim.cli import common
-from visprim.params import CLASSIFIER_PARAMETERS
+from visprim.params import CLASSIFIER_PARAMETERS, RATE_OPTIONS
 
 #: The classifier's settings by name (their defaults are the options' defaults).
 _CLF = {p.name: p for p in CLASSIFIER_PARAMETERS}
@@ -63,9 +63,29 @@ def _run_rate(args: argparse.Namespace, out: Any, also: Any) -> int:
         print(f"visprim evaluate: {exc}", file=sys.stderr)
         return 2
     print(rate_markdown(results), end="")
+    nested = None
+    if args.rate_nested:
+        from visprim.rate.nested import nested_markdown, nested_rate_benchmark
+
+        try:
+            nested = nested_rate_benchmark(
+                args.data,
+                labels=args.labels,
+                group_by=args.group,
+                period=args.resample,
+                jobs=args.jobs,
+            )
+        except ValueError as exc:
+            print(f"visprim evaluate: {exc}", file=sys.stderr)
+            return 2
+        print(nested_markdown(nested), end="")
     with outputs.atomic_folder(out, "evaluate") as tmp:
         paths = dict(also(tmp)) if also is not None else {}
         paths.update(write_rate_report(results, tmp))
+        if nested is not None:
+            from visprim.rate.nested import write_nested_report
+
+            paths.update(write_nested_report(nested, tmp))
     written = ", ".join(str(outputs.moved(p, tmp, out)) for p in paths.values())
     print(f"\nwritten: {written}")
     return 0
@@ -76,6 +96,19 @@ def _run_rate(args: argparse.Namespace, out: Any, also: Any) -> int:
 METHODS = ("combined", "frames", "coordinates", "segments", "histogram")
 #: :data:`visprim.evaluate.RECONSTRUCTIONS` (a test checks they agree).
 RECONSTRUCTIONS = ("each-arm", "joint")
+
+
+def _stroke(text: str) -> float | None:
+    """``--max-stroke``: seconds, or ``none`` for no cut."""
+    if text.strip().lower() == "none":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected seconds or 'none', got {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
+    return value
 
 
 def register(sub: Any) -> None:
@@ -146,26 +179,33 @@ def register(sub: Any) -> None:
         "second of movement against rebuild error; rate.md, rate.csv, rate.png)",
     )
     p.add_argument("--rate-only", action="store_true", help="only the rate-distortion benchmark")
+    rate = RATE_OPTIONS
     p.add_argument(
         "--rate-centres",
         choices=("projection", "members"),
-        default="projection",
-        help="primitive centres of the rate benchmark: k-means centres in the projection "
-        "space (default, the paper's) or means of the members' segment vectors",
+        default=rate["centres"].default,
+        help=f"rate benchmark: {rate['centres'].help} (default {rate['centres'].default})",
     )
     p.add_argument(
         "--rate-posture",
-        choices=("mean", "unit"),
-        default="mean",
-        help="rate benchmark: store a segment's posture as its 6 channel means (default) or "
-        "as the 2 unit bone directions of that mean (4 numbers)",
+        choices=rate["posture"].searched,
+        default=rate["posture"].default,
+        help=f"rate benchmark: {rate['posture'].help} (default {rate['posture'].default})",
     )
     p.add_argument(
         "--max-stroke",
-        type=float,
-        default=None,
+        type=_stroke,
+        default=rate["max_stroke"].default,
         metavar="S",
-        help="rate benchmark: cut segments longer than S seconds into equal parts",
+        help=f"rate benchmark: {rate['max_stroke'].help}; 'none' or seconds (default "
+        f"{rate['max_stroke'].default})",
+    )
+    p.add_argument(
+        "--rate-nested",
+        action="store_true",
+        help="with --rate or --rate-only: also choose posture, max stroke and description per "
+        "budget by nested leave-one-group-out and score only the outer group "
+        "(rate_nested.md, rate_nested.csv; slow: groups x (groups - 1) x settings folds)",
     )
     p.add_argument("--out", default="out/evaluate", help="report folder (default out/evaluate)")
     p.add_argument(

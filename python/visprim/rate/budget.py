@@ -1,0 +1,182 @@
+"""One movement described within a budget of numbers per second (``visprim imitate
+--budget``)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from visprim.rate.descriptions import dct_residual, movement_numbers
+
+#: Most DCT coefficients per channel of the residual among the candidates.
+DCT_Q_MAX = 6
+
+# ---------------------------------------------------------------------------- one movement
+
+
+@dataclass(frozen=True)
+class Description:
+    """The description chosen for one movement's segments: ``family`` (:data:`FAMILIES`),
+    its ``m`` coefficients, the ``numbers`` it stores and the ``seconds`` it covers, and
+    ``q`` DCT coefficients per channel of the residual (``nearest+dct``,
+    ``residual+dct``)."""
+
+    family: str
+    m: int
+    numbers: int
+    seconds: float
+    q: int = 0
+
+    @property
+    def numbers_per_s(self) -> float:
+        return self.numbers / self.seconds if self.seconds > 0 else float("inf")
+
+    @property
+    def label(self) -> str:
+        if self.family == "nearest+dct":
+            return f"nearest primitive + {self.q} DCT coefficient(s) per channel"
+        if self.family == "residual+dct":
+            return (
+                f"nearest primitive + {self.m} residual + {self.q} DCT coefficient(s) per channel"
+            )
+        if self.family == "residual":
+            return f"nearest primitive + {self.m} residual coefficient(s)"
+        if self.family == "projection":
+            return f"own projection ({self.m} coefficients)"
+        return {"nearest": "nearest primitive", "nearest+gain": "nearest primitive × gain"}[
+            self.family
+        ]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "description": self.label,
+            "family": self.family,
+            "coefficients": self.m,
+            "dct_coefficients_per_channel": self.q,
+            "numbers": self.numbers,
+            "seconds": self.seconds,
+            "numbers_per_s": self.numbers_per_s,
+        }
+
+
+def _candidates(
+    model: Any, vectors: NDArray[np.float64], seconds: float
+) -> tuple[list[tuple[Description, float]], Callable[[Description], NDArray[np.float64]]]:
+    """Every description :func:`describe_segments` chooses from, with the squared error of
+    its rebuild, and the function that rebuilds the segments by one of them."""
+    from visprim.vectors import amplitude_gains
+
+    x = np.asarray(vectors, dtype=np.float64)
+    n_seg = x.shape[0]
+    f = int(model.n_components)
+    posture = int(model.n_channels) if model.offsets == "mean" else 0
+    p = model.transform(x)
+    labels, _ = model.assign(p)
+    centre = model.cluster_centers_[labels]
+    c = int(model.n_channels)
+
+    def rebuild(d: Description) -> NDArray[np.float64]:
+        if d.family == "projection":
+            return np.asarray(p @ model.components_.T + model.mean_)
+        coef = centre.copy()
+        coef[:, : d.m] = p[:, : d.m]
+        out = np.asarray(coef @ model.components_.T + model.mean_)
+        if d.family == "nearest+gain":
+            out = out * amplitude_gains(x, out)[:, None]
+        if d.q:
+            out = dct_residual(x, out, c, d.q, skip_constant=model.offsets == "mean")
+        return out
+
+    options = [("nearest", 0, 0)] + ([("nearest+gain", 0, 0)] if model.offsets == "mean" else [])
+    options += [("residual", m, 0) for m in range(1, f)] + [("projection", f, 0)]
+    q_max = min(DCT_Q_MAX, int(model.n_samples) - 1)
+    options += [("nearest+dct", 0, q) for q in range(1, q_max + 1)]
+    options += [("residual+dct", m, q) for m in range(1, f) for q in range(1, q_max + 1)]
+    out = []
+    for fam, m, q in options:
+        numbers = movement_numbers(fam, n_seg, posture, m, q, c)
+        d = Description(fam, m, numbers, float(seconds), q)
+        out.append((d, float(np.sum((x - rebuild(d)) ** 2))))
+    return out, rebuild
+
+
+def describe_segments(
+    model: Any,
+    vectors: NDArray[np.float64],
+    seconds: float,
+    *,
+    family: str | None = None,
+    budget: float | None = None,
+) -> tuple[NDArray[np.float64], Description]:
+    """One movement's segment vectors ``(N, d)`` (``seconds`` long) rebuilt through a fitted
+    :class:`~visprim.model.PrimitiveModel`, and the description used.
+
+    Without ``budget``: ``family`` (default the model's own, the nearest primitive, scaled
+    by its gain if ``model.amplitude``; or ``"projection"``). With ``budget`` (numbers per
+    second of movement): of the nearest primitive, with its gain, with m = 1 … f − 1
+    residual coefficients, the own projection (m = f), and the nearest primitive (with
+    or without m residual coefficients) corrected by q = 1 … :data:`DCT_Q_MAX` DCT
+    coefficients per channel of what is left (:func:`~visprim.rate.descriptions.dct_residual`),
+    the one whose rebuild lies
+    closest to the segments (squared error of the segment vectors) among those that fit
+    the budget. Posture numbers are counted for posture-relative models
+    (``offsets="mean"``); a model of absolute curves stores none.
+    """
+    candidates, rebuild = _candidates(model, vectors, seconds)
+    if budget is None:
+        fam = family or ("nearest+gain" if model.amplitude else "nearest")
+        if fam not in ("nearest", "nearest+gain", "projection"):
+            raise ValueError(f"family must be nearest, nearest+gain or projection, got {fam!r}")
+        d = next(d for d, _ in candidates if d.family == fam)
+        return rebuild(d), d
+    fitting = [(err, d.numbers, i) for i, (d, err) in enumerate(candidates)]
+    fitting = [c for c in fitting if candidates[c[2]][0].numbers_per_s <= budget * (1 + 1e-12)]
+    if not fitting:
+        least = candidates[0][0]
+        raise ValueError(
+            f"budget {budget:g} numbers/s is below the smallest description of this movement "
+            f"({least.numbers_per_s:.1f} numbers/s: nearest primitive, "
+            f"{vectors.shape[0]} segment(s) in {seconds:.2f} s)"
+        )
+    d = candidates[min(fitting)[2]][0]
+    return rebuild(d), d
+
+
+def share_budget(
+    model: Any,
+    parts: Sequence[tuple[NDArray[np.float64], float]],
+    span: float,
+    budget: float,
+) -> list[float]:
+    """Per-part budgets (numbers per second of each part) that share ``budget`` numbers per
+    second of a ``span``-second recording between its parts (its arms imitated one by one,
+    each ``(segment vectors, seconds)``): the combination of descriptions (one per part,
+    :func:`describe_segments`) with the least summed squared error whose numbers together
+    fit ``budget × span``."""
+    options = [_candidates(model, x, sec)[0] for x, sec in parts]
+    total = budget * span * (1 + 1e-12)
+    # Every combination, as arrays over the grid of one choice per part.
+    numbers = np.zeros(())
+    errors = np.zeros(())
+    for o in options:
+        numbers = np.add.outer(numbers, [d.numbers for d, _ in o])
+        errors = np.add.outer(errors, [e for _, e in o])
+    fits = numbers <= total
+    best: tuple[float, tuple[int, ...]] | None = None
+    if fits.any():
+        flat = int(np.argmin(np.where(fits, errors, np.inf)))
+        best = (
+            float(errors.flat[flat]),
+            tuple(int(i) for i in np.unravel_index(flat, errors.shape)),
+        )
+    if best is None:
+        least = sum(o[0][0].numbers for o in options) / span
+        raise ValueError(
+            f"budget {budget:g} numbers/s is below the smallest description of this movement "
+            f"({least:.1f} numbers/s: the nearest primitive for each of its {len(parts)} parts)"
+        )
+    return [o[j][0].numbers_per_s for o, j in zip(options, best[1], strict=True)]

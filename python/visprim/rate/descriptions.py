@@ -1,0 +1,302 @@
+"""Primitive descriptions of segments: what each stores (numbers) and how it rebuilds a
+segment (codebooks of primitive centres, residual coefficients, warps)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+#: Primitive counts k of the ``nearest`` descriptions.
+RATE_K: tuple[int, ...] = (10, 20, 30, 50, 100, 200, 300)
+#: Coefficient counts m of the ``residual`` and ``projection`` descriptions (capped at f).
+RATE_M: tuple[int, ...] = (1, 2, 3, 4, 6, 8, 12, 16, 20, 30)
+#: Rates (numbers per second of movement) of the keyframe and DCT baselines.
+BASELINE_RATES: tuple[float, ...] = (4, 6, 8, 10, 12, 16, 20, 30, 40, 60)
+#: The descriptions measured (module docstring).
+FAMILIES: tuple[str, ...] = (
+    "nearest",
+    "nearest+gain",
+    "residual",
+    "projection",
+    "warp",
+    "nearest+dct",
+    "bridge",
+    "bridge+gain",
+    "bridge+residual",
+    "keyframes-angles",
+    "keyframes-directions",
+    "dct-angles",
+    "dct-directions",
+)
+#: Where primitive centres live: the k-means centres in the projection space (the paper),
+#: or the means of the members' whole segment vectors.
+CENTRES: tuple[str, ...] = ("projection", "members")
+#: How a segment's posture is stored: each channel's mean (6 numbers per arm), or the two
+#: bone directions of that mean as unit vectors (4 numbers; :func:`unit_posture`).
+POSTURES: tuple[str, ...] = ("mean", "unit")
+#: Warp values tried per segment (``u → u + w u (1 − u)``).
+WARP_GRID: NDArray[np.float64] = np.linspace(-0.8, 0.8, 9)
+#: Nearest primitives among which the warped primitive is chosen.
+WARP_CANDIDATES = 5
+#: k of the residual descriptions (the model's default number of primitives).
+RESIDUAL_K = 30
+#: DCT coefficients per channel q of the ``nearest+dct`` descriptions.
+RATE_Q: tuple[int, ...] = (1, 2, 3, 4, 6)
+#: Shape channels of a one-arm segment: the two bone directions' coordinates.
+SHAPE_CHANNELS = 6
+
+
+# ---------------------------------------------------------------------------- counting
+
+
+def segment_numbers(
+    family: str, n_channels: int, m: int = 0, q: int = 0, shape_channels: int = SHAPE_CHANNELS
+) -> int:
+    """Numbers stored per segment by a primitive description of ``family``: the primitive
+    id, the duration and ``n_channels`` posture numbers, plus a gain (``nearest+gain``),
+    ``m`` coefficients (``residual``), or a gain and one warp number (``warp``);
+    ``projection`` stores ``m`` coefficients, the duration and the posture (no id);
+    ``nearest+dct`` stores ``q`` DCT coefficients of each of the ``shape_channels``
+    channels of the segment's shape (6 for one arm's bone directions), and
+    ``residual+dct`` both ``m`` residual and ``q`` DCT coefficients per channel.
+    ``bridge`` descriptions store no posture per segment (their boundary postures are
+    counted by :func:`movement_numbers`): the id and duration, plus a gain or ``m``
+    coefficients."""
+    base = 2 + int(n_channels)
+    if family == "nearest":
+        return base
+    if family == "nearest+gain":
+        return base + 1
+    if family == "residual":
+        return base + int(m)
+    if family == "warp":
+        return base + 2
+    if family == "nearest+dct":
+        return base + int(q) * int(shape_channels)
+    if family == "residual+dct":
+        return base + int(m) + int(q) * int(shape_channels)
+    if family == "projection":
+        return 1 + int(n_channels) + int(m)
+    if family == "bridge":
+        return 2
+    if family == "bridge+gain":
+        return 3
+    if family == "bridge+residual":
+        return 2 + int(m)
+    raise ValueError(f"segment_numbers: unknown family {family!r}")
+
+
+#: Numbers of one boundary posture of the bridge descriptions: two unit bone directions.
+BOUNDARY_NUMBERS = 4
+
+
+def movement_numbers(
+    family: str,
+    n_segments: int,
+    n_channels: int,
+    m: int = 0,
+    q: int = 0,
+    shape_channels: int = SHAPE_CHANNELS,
+) -> int:
+    """All the numbers of one movement of ``n_segments`` consecutive segments: its start
+    time, each segment's numbers (:func:`segment_numbers`) and, for the ``bridge``
+    descriptions, the posture at each of the ``n_segments + 1`` boundaries (two unit bone
+    directions, :data:`BOUNDARY_NUMBERS`)."""
+    total = 1 + int(n_segments) * segment_numbers(family, n_channels, m, q, shape_channels)
+    if family.startswith("bridge"):
+        total += BOUNDARY_NUMBERS * (int(n_segments) + 1)
+    return total
+
+
+def bridge_lines(
+    curves: NDArray[np.float64], ends: tuple[NDArray[np.float64], NDArray[np.float64]] | None
+) -> NDArray[np.float64]:
+    """Straight lines ``(N, n, C)`` from each segment's first to its last posture: those of
+    ``curves`` ``(N, n, C)``, or the given ``ends`` ``((N, C), (N, C))``."""
+    first, last = (curves[:, 0, :], curves[:, -1, :]) if ends is None else ends
+    u = np.linspace(0.0, 1.0, curves.shape[1])[None, :, None]
+    return np.asarray(first[:, None, :] * (1.0 - u) + last[:, None, :] * u)
+
+
+def unit_posture(
+    directions: NDArray[np.float64], shapes: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Posture offsets ``(N, C)`` rebuilt from the unit bone directions ``(N, C)`` of each
+    segment's mean posture and its rebuilt zero-mean shape ``(N, n, C)``: each bone's
+    direction scaled by ``sqrt(1 − mean |shape|²)``, the length that makes the mean squared
+    length of ``offset + shape`` one, as it is for the unit bones of a movement."""
+    n, _, c = shapes.shape
+    sq = np.mean(np.sum(shapes.reshape(n, -1, c // 3, 3) ** 2, axis=3), axis=1)  # (N, bones)
+    scale = np.sqrt(np.clip(1.0 - sq, 0.0, 1.0))
+    return np.asarray((directions.reshape(n, -1, 3) * scale[:, :, None]).reshape(n, c))
+
+
+def unit_bones(values: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(..., 6 n_arms)`` bone directions scaled to unit length per bone."""
+    v = values.reshape(*values.shape[:-1], -1, 3)
+    return np.asarray(v / np.maximum(np.linalg.norm(v, axis=-1, keepdims=True), 1e-12)).reshape(
+        values.shape
+    )
+
+
+# ---------------------------------------------------------------------------- codebook
+
+
+@dataclass
+class Codebook:
+    """PCA basis and primitive centres learned from training segment vectors.
+
+    ``mean`` (d,) and ``components`` (d, f) are the PCA; ``centers[k]`` the (k, d) centres
+    of k primitives as full segment vectors (rad, posture-relative shapes).
+    """
+
+    mean: NDArray[np.float64]
+    components: NDArray[np.float64]
+    centers: dict[int, NDArray[np.float64]]
+
+    @property
+    def n_components(self) -> int:
+        return int(self.components.shape[1])
+
+    def project(self, vectors: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Coefficients ``(N, f)`` of segment vectors along the eigen-primitives."""
+        return np.asarray((vectors - self.mean) @ self.components)
+
+    def nearest(self, vectors: NDArray[np.float64], k: int, n: int = 1) -> NDArray[np.int64]:
+        """Indices ``(N, n)`` of the ``n`` centres of ``k`` nearest each vector (full
+        segment-vector distance)."""
+        c = self.centers[k]
+        d2 = (
+            np.einsum("ij,ij->i", vectors, vectors)[:, None]
+            - 2.0 * vectors @ c.T
+            + np.einsum("ij,ij->i", c, c)[None, :]
+        )
+        return np.argsort(d2, axis=1, kind="stable")[:, :n].astype(np.int64)
+
+
+def fit_codebook(
+    vectors: NDArray[np.float64],
+    ks: Iterable[int],
+    *,
+    n_components: int = 30,
+    centres: str = "projection",
+    n_init: int = 3,
+    seed: int = 0,
+) -> Codebook:
+    """PCA of training ``vectors`` (N, d), then k-means of their f-D projections for each
+    k of ``ks`` (k ≤ N). ``centres`` (:data:`CENTRES`): the centres as vectors rebuilt from
+    the k-means centres (``"projection"``, the paper) or the means of the members' own
+    vectors (``"members"``)."""
+    from visprim import kernels
+    from visprim.pca import fit_pca
+
+    if centres not in CENTRES:
+        raise ValueError(f"centres must be one of {list(CENTRES)}, got {centres!r}")
+    f = int(min(n_components, vectors.shape[0] - 1, vectors.shape[1]))
+    basis = fit_pca(vectors, n_keep=f)
+    comps = np.ascontiguousarray(basis.eigenvectors[:, :f])
+    proj = np.ascontiguousarray((vectors - basis.mean) @ comps)
+    out: dict[int, NDArray[np.float64]] = {}
+    for k in ks:
+        if k > vectors.shape[0]:
+            continue
+        km = kernels.kmeans(proj, int(k), n_init=n_init, seed=seed)
+        c_proj = np.asarray(km.centers)
+        full = c_proj @ comps.T + basis.mean
+        if centres == "members":
+            labels = np.asarray(km.labels)
+            for j in range(int(k)):
+                members = labels == j
+                if members.any():
+                    full[j] = vectors[members].mean(axis=0)
+        out[int(k)] = np.ascontiguousarray(full)
+    return Codebook(np.asarray(basis.mean), comps, out)
+
+
+def warp_curves(curves: NDArray[np.float64], w: float) -> NDArray[np.float64]:
+    """Curves ``(..., n, C)`` on ``n`` equally spaced instants of ``u ∈ [0, 1]``, evaluated
+    at ``u + w u (1 − u)`` (linear interpolation): a monotone warp for ``|w| < 1`` that keeps
+    both ends (``w > 0`` runs the start faster, ``w < 0`` slower)."""
+    n = curves.shape[-2]
+    u = np.linspace(0.0, 1.0, n)
+    x = (u + w * u * (1.0 - u)) * (n - 1)
+    i0 = np.clip(np.floor(x).astype(np.int64), 0, n - 2)
+    frac = (x - i0)[:, None]
+    return curves[..., i0, :] * (1.0 - frac) + curves[..., i0 + 1, :] * frac
+
+
+def dct_residual(
+    vectors: NDArray[np.float64],
+    predicted: NDArray[np.float64],
+    n_channels: int,
+    q: int,
+    skip_constant: bool = True,
+) -> NDArray[np.float64]:
+    """``predicted`` segment vectors ``(N, d)`` corrected by the first ``q`` non-constant
+    orthonormal DCT-II coefficients of each channel of their residual ``vectors −
+    predicted`` along the segment's samples (the constant term is left out: both are
+    posture-relative, so the residual's mean is what the posture already stores; with
+    ``skip_constant=False``, for absolute curves, the first ``q`` terms)."""
+    from scipy.fft import dct, idct
+
+    from visprim.vectors import to_curves, to_vectors
+
+    r = to_curves(vectors - predicted, n_channels)  # (N, n, C)
+    c = dct(r, type=2, norm="ortho", axis=1)
+    keep = np.zeros(c.shape[1], dtype=bool)
+    first = 1 if skip_constant else 0
+    keep[first : first + int(q)] = True
+    c[:, ~keep, :] = 0.0
+    return np.asarray(predicted + to_vectors(idct(c, type=2, norm="ortho", axis=1)))
+
+
+def rebuild_segments(
+    book: Codebook,
+    vectors: NDArray[np.float64],
+    n_channels: int,
+    family: str,
+    param: int,
+) -> NDArray[np.float64]:
+    """Posture-relative segment vectors ``(N, d)`` rebuilt by one primitive description
+    (``param``: k for ``nearest``/``nearest+gain``/``warp``, m for ``residual`` and
+    ``projection``; module docstring)."""
+    from visprim.vectors import amplitude_gains, to_curves, to_vectors
+
+    if family == "projection":
+        m = min(int(param), book.n_components)
+        p = book.project(vectors)[:, :m]
+        return np.asarray(p @ book.components[:, :m].T + book.mean)
+    if family == "residual":
+        k = RESIDUAL_K if RESIDUAL_K in book.centers else max(book.centers)
+        centre = book.centers[k][book.nearest(vectors, k)[:, 0]]
+        m = min(int(param), book.n_components)
+        e = book.components[:, :m]
+        return np.asarray(centre + ((vectors - centre) @ e) @ e.T)
+    if family == "nearest+dct":
+        k = RESIDUAL_K if RESIDUAL_K in book.centers else max(book.centers)
+        centre = book.centers[k][book.nearest(vectors, k)[:, 0]]
+        return dct_residual(vectors, centre, n_channels, int(param))
+    k = int(param)
+    if family in ("nearest", "nearest+gain"):
+        rebuilt = book.centers[k][book.nearest(vectors, k)[:, 0]].copy()
+        if family == "nearest+gain":
+            rebuilt *= amplitude_gains(vectors, rebuilt)[:, None]
+        return rebuilt
+    if family != "warp":
+        raise ValueError(f"rebuild_segments: unknown family {family!r}")
+    cand = book.nearest(vectors, k, min(WARP_CANDIDATES, k))
+    best = np.full(vectors.shape[0], np.inf)
+    out = np.empty_like(vectors)
+    for w in WARP_GRID:
+        warped = to_vectors(warp_curves(to_curves(book.centers[k], n_channels), float(w)))
+        for j in range(cand.shape[1]):
+            r = warped[cand[:, j]]
+            r = r * amplitude_gains(vectors, r)[:, None]
+            err = np.einsum("ij,ij->i", vectors - r, vectors - r)
+            better = err < best
+            best[better] = err[better]
+            out[better] = r[better]
+    return out
