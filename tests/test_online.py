@@ -92,6 +92,24 @@ def test_online_dtw_closed_end_is_the_offline_dtw_and_open_end_the_best_prefix()
         dtw.push(np.full((1, 3), np.nan))
 
 
+def test_causal_filter_is_scipy_sosfilt_whatever_the_chunks() -> None:
+    from scipy import signal
+    from visprim.filtering import butterworth
+
+    sos = butterworth(4, 0.25)
+    x = np.random.default_rng(1).normal(size=(120, 3)).cumsum(axis=0)
+    zi = signal.sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
+    want, _ = signal.sosfilt(sos, x, axis=0, zi=zi)
+    for chunk in (1, 7, 120):
+        f = kernels.CausalSos(sos, 3)
+        got = np.concatenate([f.filter(x[a : a + chunk]) for a in range(0, 120, chunk)])
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
+    with pytest.raises(ValueError, match="channels"):
+        f.filter(np.zeros((2, 4)))
+    with pytest.raises(ValueError, match="NaN"):
+        f.filter(np.full((1, 3), np.nan))
+
+
 def test_ring_buffer_keeps_the_last_frames() -> None:
     ring = FrameRing(5, 2)
     ring.extend(np.arange(14.0).reshape(7, 2))
