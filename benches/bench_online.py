@@ -301,7 +301,7 @@ def report(stamp: dict[str, Any], fid: dict[str, Any], notes: list[str], thr: An
         f"instruction set {stamp['instruction_set']} · Python {stamp['python']}",
         f"load average at start {stamp['load_start']}, at the end {stamp['load_end']} "
         "(1/5/15 min). The machine was shared with other jobs: throughput is a lower bound.",
-        f"command: `{stamp['command']}`",
+        f"command: `{stamp['command']}` · segmenter options: {stamp['options']}",
         "",
         "## fidelity: online vs offline (same model), ±100 ms",
         "",
@@ -376,7 +376,22 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument(
         "--skip", default="", help="comma list of sections to skip: fidelity,throughput,memory"
     )
+    ap.add_argument(
+        "--option",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="an OnlineSegmenter option for the fidelity replays (e.g. filter_order=4, "
+        "threshold=fixed, segment_filter=causal); repeatable",
+    )
     args = ap.parse_args(argv)
+    options: dict[str, Any] = {}
+    for item in args.option:
+        name, _, value = item.partition("=")
+        try:
+            options[name] = json.loads(value)
+        except json.JSONDecodeError:
+            options[name] = value
     if not args.data.is_dir():
         print(f"bench_online: {args.data}: no such folder (the shared recordings)", file=sys.stderr)
         return 2
@@ -391,8 +406,9 @@ def main(argv: list[str] | None = None) -> int:
         "python": sys.version.split()[0],
         "load_start": " / ".join(f"{v:.1f}" for v in load0),
         "command": "python benches/bench_online.py " + " ".join(argv or sys.argv[1:]),
+        "options": ", ".join(args.option) or "defaults",
     }
-    fid, notes = ({}, []) if "fidelity" in skip else fidelity(args.data, args.quick)
+    fid, notes = ({}, []) if "fidelity" in skip else fidelity(args.data, args.quick, **options)
     thr_rows: list[dict[str, Any]] = []
     src = ""
     mem = None
