@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from visprim import kernels
-from visprim.classify import DTWClassifier, dtw_matrix
+from visprim.classify import DTWClassifier, MotionClassifier, dtw_matrix
 from visprim.model import PrimitiveModel
 from visprim.online import (
     ClassUpdate,
@@ -92,6 +92,24 @@ def test_online_dtw_closed_end_is_the_offline_dtw_and_open_end_the_best_prefix()
         dtw.push(np.full((1, 3), np.nan))
 
 
+def test_causal_filter_is_scipy_sosfilt_whatever_the_chunks() -> None:
+    from scipy import signal
+    from visprim.filtering import butterworth
+
+    sos = butterworth(4, 0.25)
+    x = np.random.default_rng(1).normal(size=(120, 3)).cumsum(axis=0)
+    zi = signal.sosfilt_zi(sos)[:, :, None] * x[0][None, None, :]
+    want, _ = signal.sosfilt(sos, x, axis=0, zi=zi)
+    for chunk in (1, 7, 120):
+        f = kernels.CausalSos(sos, 3)
+        got = np.concatenate([f.filter(x[a : a + chunk]) for a in range(0, 120, chunk)])
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
+    with pytest.raises(ValueError, match="channels"):
+        f.filter(np.zeros((2, 4)))
+    with pytest.raises(ValueError, match="NaN"):
+        f.filter(np.full((1, 3), np.nan))
+
+
 def test_ring_buffer_keeps_the_last_frames() -> None:
     ring = FrameRing(5, 2)
     ring.extend(np.arange(14.0).reshape(7, 2))
@@ -117,10 +135,42 @@ def test_events_do_not_depend_on_the_chunk_size(fitted) -> None:
             for e in _events(model, clf, trial, chunk)
             if isinstance(e, (SegmentClosed, MovementEnded))
         ]
-        for chunk in (1, 7, trial.n_frames)
+        for chunk in (1, 7, 1000)
     ]
+    assert trial.n_frames < 1000  # the last replay is one chunk
     assert segs[0], "no segment found"
     assert segs[0] == segs[1] == segs[2]
+
+
+def test_a_motion_classifier_gives_the_final_class_of_predict(fitted, hdm05) -> None:
+    model, _, test = fitted
+    train = [t for t in hdm05 if not t.name.startswith("HDM_mm")]
+    clf = MotionClassifier({"n_components": 6, "n_clusters": 6, "n_init": 1}).fit(
+        train, [_label(t.name) for t in train], [t.name.split("_")[1] for t in train]
+    )
+    results = [compare_trial(model, t, clf, chunk=16) for t in test]
+    # One movement per recording here: the online final class is predict's on its frames.
+    assert all(r.online_class for r in results)
+    assert summarise(results)["class_equal"] == 1.0
+    events = [e for t in test for e in _events(model, clf, t, 7)]
+    updates = [e for e in events if isinstance(e, ClassUpdate)]
+    assert updates and all(0.0 <= e.confidence <= 1.0 for e in updates)
+    assert {e.label for e in updates} <= set(clf.classes_.tolist())
+
+
+def test_the_zero_phase_segment_filter_brings_segments_closer_to_offline(fitted) -> None:
+    model, clf, test = fitted
+    distance = {}
+    for how in ("zero_phase", "causal"):
+        segs = [
+            e
+            for t in test
+            for e in OnlinePipeline(model, None, segment_filter=how).replay(t, chunk=9)
+            if isinstance(e, SegmentClosed)
+        ]
+        distance[how] = float(np.median([e.distance for e in segs]))
+    # Nearer the primitives learned from zero-phase filtered segments.
+    assert distance["zero_phase"] < distance["causal"], distance
 
 
 def test_replay_agrees_with_the_offline_pipeline(fitted) -> None:
@@ -186,6 +236,7 @@ def test_memory_stays_flat_on_a_long_stream() -> None:
     tracemalloc.stop()
     assert n_segments > 100
     assert len({b for b, _ in sizes[1:]}) == 1  # the buffers never grow
+    assert len(pipe.segmenter.decided) <= 1  # no list grows with the movements
     traced = np.array([m for _, m in sizes])
     # Python allocations after the first minutes stay within 1 MB of where they were.
     assert traced[10:].max() - traced[10] < 1_000_000, traced[10:].max() - traced[10]

@@ -459,6 +459,9 @@ def covariance(x: ArrayLike, *, n_threads: int | None = None) -> tuple[_F64, _F6
 CovarianceAccumulator = _visprim.CovarianceAccumulator
 #: Open-end DTW of a growing query against fixed references (:mod:`visprim.online`).
 OnlineDtw = _visprim.OnlineDtw
+#: Causal ``sosfilt`` of a multichannel stream, state kept between chunks
+#: (:mod:`visprim.online.lowpass`).
+CausalSos = _visprim.CausalSos
 
 
 def eigh(a: ArrayLike, *, k: int | None = None) -> tuple[_F64, _F64]:

@@ -7,6 +7,8 @@
   latency);
 * :class:`OnlineRecogniser` — open-end DTW against a classifier's references, in Rust
   (:class:`visprim.kernels.OnlineDtw`);
+* :mod:`visprim.online.movement` — the raw frames of the movement in progress for any other
+  classifier of whole movements (:class:`~visprim.classify.MotionClassifier`);
 * :mod:`visprim.online.compare` — the online answers beside the offline pipeline's;
   :mod:`visprim.online.early` — accuracy against the fraction of the movement seen.
 """

@@ -14,8 +14,12 @@ recording). :func:`summarise` pools the trials:
   the same primitive (unpaired segments count as different);
 * **class**: the online final class (the last movement's :class:`MovementEnded`) against
   ``predict``;
-* **latency**: stream time from each segment's end to its event (``emitted − end``), plus
-  the causal filter's group delay, which the stream time does not show.
+* **latency**: stream time from each segment's end to its event (``emitted − end``). The
+  segment times are the filtered frames' shifted back by the causal filter's group delay
+  (:mod:`visprim.online.segmenter`), so the delay is part of it. Segments closed by the
+  end of the stream (:meth:`~OnlinePipeline.flush`) are marked (``at_flush``): their
+  latency says nothing of the detection. ``last`` marks a movement's last segment (closed
+  at its offset after the rest timeout).
 """
 
 from __future__ import annotations
@@ -30,6 +34,7 @@ from numpy.typing import NDArray
 from visprim.model import PrimitiveModel
 from visprim.online.events import MovementEnded, SegmentClosed
 from visprim.online.pipeline import OnlinePipeline
+from visprim.online.segmenter import Frames
 from visprim.segment import boundary_matches, segment_boundaries
 from visprim.trial import Trial
 
@@ -46,6 +51,8 @@ class TrialComparison:
     online_segments: NDArray[np.float64]  #: (m, 2) seconds
     online_primitives: NDArray[np.int64]
     latencies: NDArray[np.float64]  #: (m,) seconds of stream time
+    at_flush: NDArray[np.bool_]  #: (m,) closed by the end of the stream
+    last: NDArray[np.bool_]  #: (m,) the last segment of its movement
     offline_class: str
     online_class: str
     boundaries: tuple[int, int, int]  #: matched, online, offline
@@ -88,11 +95,18 @@ def compare_trial(
     pipe = OnlinePipeline(model, classifier, **options)
     segs: list[SegmentClosed] = []
     ends: list[MovementEnded] = []
-    for ev in pipe.replay(trial, chunk=chunk):
+    flushed: list[bool] = []
+    streamed = []
+    for a in range(0, trial.n_frames, int(chunk)):
+        streamed.extend(pipe.push(_part(trial, a, min(trial.n_frames, a + int(chunk)))))
+    n_streamed = len(streamed)
+    for k, ev in enumerate(streamed + pipe.flush()):
         if isinstance(ev, SegmentClosed):
             segs.append(ev)
+            flushed.append(k >= n_streamed)
         elif isinstance(ev, MovementEnded):
             ends.append(ev)
+    last_of = {(e.movement, e.n_segments - 1) for e in ends}
     on_seg = np.array([[s.start, s.end] for s in segs]).reshape(-1, 2)
     on_prim = np.array([s.primitive for s in segs], dtype=np.int64)
     lat = np.array([s.latency for s in segs])
@@ -115,6 +129,8 @@ def compare_trial(
         online_segments=on_seg,
         online_primitives=on_prim,
         latencies=lat,
+        at_flush=np.array(flushed, dtype=bool),
+        last=np.array([(x.movement, x.index) in last_of for x in segs], dtype=bool),
         offline_class=off_class,
         online_class=ends[-1].label if ends else "",
         boundaries=(int(matched), int(n_on), int(n_off)),
@@ -122,9 +138,19 @@ def compare_trial(
     )
 
 
+def _part(trial: Trial, a: int, b: int) -> Frames:
+    return Frames(
+        trial.times[a:b],
+        trial.markers[a:b],
+        None if trial.joints is None else trial.joints[a:b],
+        None if trial.body_frame is None else trial.body_frame[a:b],
+    )
+
+
 def summarise(results: Sequence[TrialComparison], delay: float = 0.0) -> dict[str, float]:
-    """Pooled figures (module docstring); ``delay`` (s) is added to every latency (the
-    causal filter's group delay)."""
+    """Pooled figures (module docstring); ``delay`` (s) is added to every latency (default
+    0: the segment times already carry the causal filter's delay). The latencies leave out
+    the segments closed by the end of the stream."""
     m = sum(r.boundaries[0] for r in results)
     n_on = sum(r.boundaries[1] for r in results)
     n_off = sum(r.boundaries[2] for r in results)
@@ -134,6 +160,10 @@ def summarise(results: Sequence[TrialComparison], delay: float = 0.0) -> dict[st
     eq = sum(r.primitives[0] for r in results)
     n_seg = sum(r.primitives[1] for r in results)
     lat = np.concatenate([r.latencies for r in results]) + delay if results else np.zeros(0)
+    live = np.concatenate([~r.at_flush for r in results]) if results else np.zeros(0, bool)
+    last = np.concatenate([r.last for r in results]) if results else np.zeros(0, bool)
+    inner = lat[live & ~last]
+    ends = lat[live & last]
     classed = [r for r in results if r.offline_class]
     return {
         "trials": float(len(results)),
@@ -148,6 +178,17 @@ def summarise(results: Sequence[TrialComparison], delay: float = 0.0) -> dict[st
             if classed
             else float("nan")
         ),
-        "latency_median": float(np.median(lat)) if lat.size else float("nan"),
-        "latency_p95": float(np.quantile(lat, 0.95)) if lat.size else float("nan"),
+        "latency_median": _quantile(lat[live], 0.5),
+        "latency_p95": _quantile(lat[live], 0.95),
+        "latency_segments": float(np.sum(live)),
+        "latency_inner_median": _quantile(inner, 0.5),
+        "latency_inner_p95": _quantile(inner, 0.95),
+        "latency_inner_segments": float(inner.size),
+        "latency_last_median": _quantile(ends, 0.5),
+        "latency_last_p95": _quantile(ends, 0.95),
+        "latency_last_segments": float(ends.size),
     }
+
+
+def _quantile(x: NDArray[np.float64], q: float) -> float:
+    return float(np.quantile(x, q)) if x.size else float("nan")

@@ -9,6 +9,20 @@ Push frames in chunks of any size; each call returns the events it produced, in 
   leading label changes (checked at the end of each pushed chunk);
 * :class:`~visprim.online.events.MovementEnded` — the movement is over, with its final class.
 
+Two kinds of classifier:
+
+* a :class:`~visprim.classify.DTWClassifier` (1-NN, no band) is advanced frame by frame by
+  open-end DTW in Rust (:class:`~visprim.online.recogniser.OnlineRecogniser`); its final
+  class is the closed-end DTW of the movement's frames, which is ``predict``'s cost;
+* any other fitted classifier of whole movements with ``predict`` (a
+  :class:`~visprim.classify.MotionClassifier`) gets the movement's raw frames, kept in a
+  ring of ``max_movement`` seconds (:class:`~visprim.online.movement.MovementFrames`): its
+  ``predict`` on the movement so far gives the running class at each closed segment and the
+  final class when the movement ends (confidence ``1 − d₁ / d₂`` from its ``distances``).
+
+The frames of a movement, for either, are those received since the stream began or the
+previous movement ended, up to the frame where its end was decided.
+
 :meth:`OnlinePipeline.replay` runs a whole recording through it.
 """
 
@@ -21,8 +35,10 @@ from typing import Any
 
 import numpy as np
 
+from visprim.classify import DTWClassifier
 from visprim.model import PrimitiveModel
 from visprim.online.events import ClassUpdate, Event, MovementEnded, SegmentClosed
+from visprim.online.movement import MovementFrames, WholeMovementClassifier
 from visprim.online.recogniser import OnlineRecogniser
 from visprim.online.segmenter import Frames, OnlineSegmenter, frames_of
 from visprim.trial import Trial
@@ -36,16 +52,34 @@ class OnlinePipeline:
     Parameters
     ----------
     model : fitted PrimitiveModel (segmentation and primitives).
-    classifier : fitted DTWClassifier, optional — running and final class.
+    classifier : fitted classifier of whole movements, optional — running and final class
+        (a DTWClassifier by open-end DTW, any other through its ``predict``: module
+        docstring).
+    max_movement : float, seconds
+        Longest movement whose raw frames are kept for a classifier other than a
+        DTWClassifier (default 60 s; a longer movement is classified on its last
+        ``max_movement`` seconds).
     **options : passed to :class:`~visprim.online.segmenter.OnlineSegmenter`
         (``filter_order``, ``threshold``, ``rest_timeout``, ``max_segment``, ...).
     """
 
-    def __init__(self, model: PrimitiveModel, classifier: Any = None, **options: Any) -> None:
+    def __init__(
+        self,
+        model: PrimitiveModel,
+        classifier: Any = None,
+        *,
+        max_movement: float = 60.0,
+        **options: Any,
+    ) -> None:
         self.segmenter = OnlineSegmenter(model, **options)
-        self.recogniser = (
-            None if classifier is None else OnlineRecogniser.from_classifier(classifier)
-        )
+        self.recogniser: OnlineRecogniser | None = None
+        self.whole: WholeMovementClassifier | None = None
+        if isinstance(classifier, DTWClassifier) and _streamable(classifier):
+            self.recogniser = OnlineRecogniser.from_classifier(classifier)
+        elif classifier is not None:
+            self.whole = WholeMovementClassifier(
+                classifier, MovementFrames(max_movement), self.segmenter.arms
+            )
         self._features: np.ndarray | None = None
         self._fed = 0  # stream frames given to the recogniser
         self._chunk_base = 0
@@ -56,6 +90,8 @@ class OnlinePipeline:
     def buffer_bytes(self) -> int:
         """Bytes of every buffer the pipeline holds (fixed after the first chunk)."""
         extra = 0 if self.recogniser is None else self.recogniser.memory_bytes
+        if self.whole is not None:
+            extra += self.whole.frames.nbytes
         return self.segmenter.buffer_bytes + extra
 
     def push(self, chunk: Trial | Frames | None = None, **arrays: Any) -> list[Event]:
@@ -67,6 +103,8 @@ class OnlinePipeline:
         out: list[Event] = []
         seg = self.segmenter
         self._emitted = float(frames.times[-1])
+        if self.whole is not None:
+            self.whole.frames.extend(frames)
         if self.recogniser is not None:
             self._features = self.recogniser.features(frames.as_trial(seg.arms))[: len(frames)]
             self._chunk_base = seg.n_frames
@@ -118,6 +156,18 @@ class OnlinePipeline:
         out: list[Event] = [event]
         if self.recogniser is not None and self.segmenter._open:
             out.extend(self._running(force=True))
+        if self.whole is not None and self.segmenter._open:
+            label, conf, cost, n = self.whole.classify(self.segmenter.n_frames)
+            out.append(
+                ClassUpdate(
+                    label=str(label),
+                    confidence=conf,
+                    cost=cost,
+                    movement=self.segmenter.movement,
+                    frames=n,
+                    emitted=self._emitted,
+                )
+            )
         return out
 
     def _running(self, *, force: bool) -> list[Event]:
@@ -142,10 +192,21 @@ class OnlinePipeline:
     def _movement_end(self, event: MovementEnded) -> MovementEnded:
         """The movement's final class: the closed-end DTW of the frames received when its
         end was decided; the recogniser then starts a new query."""
+        if self.whole is not None:
+            upto = self.segmenter.decided.pop(0)
+            label, conf, _, _ = self.whole.classify(upto)
+            self.whole.start = upto
+            return replace(event, label=str(label), confidence=conf)
         if self.recogniser is None:
+            self.segmenter.decided.clear()
             return event
         self._feed(self.segmenter.decided.pop(0))
         label, conf, _ = self.recogniser.final()
         self.recogniser.reset()
         self._label = None
         return replace(event, label=str(label), confidence=conf)
+
+
+def _streamable(classifier: DTWClassifier) -> bool:
+    """True when open-end DTW gives the classifier's answers: 1-NN without a band."""
+    return classifier.band is None and int(classifier.n_neighbors) == 1

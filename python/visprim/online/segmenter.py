@@ -30,7 +30,13 @@ Stages, each causal, frame by frame (chunks of any size give the same segments):
 
 Each closed segment is resampled like a training segment
 (:func:`visprim.vectors.vectors_from_frames`), projected and assigned its nearest primitive
-(:meth:`~visprim.model.PrimitiveModel.assign`).
+(:meth:`~visprim.model.PrimitiveModel.assign`). With ``segment_filter="zero_phase"``
+(default) the segment's values are not the causal filter's: its raw angles, from
+``_LEAD`` frames before its start to the frame that decided its end, go through the model's
+own zero-phase filter (:func:`visprim.filtering.lowpass`, the offline order), as offline.
+This look-ahead costs no latency (those frames have arrived when the segment closes) and
+gives the segment the offline shape (the causal order-2 filter lags and smooths less);
+``"causal"`` uses the causally filtered values.
 
 Latency (stream time from a segment's last frame to its event): the low-pass' group delay
 + one frame (velocity) + the time the next run needs to become significant (inner
@@ -49,6 +55,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from visprim.features import from_angles, periodic_channels
+from visprim.filtering import lowpass
 from visprim.ik import DEFAULT_SINGULAR_ANGLE, arm_angles_corpus
 from visprim.model import PrimitiveModel
 from visprim.online.events import MovementEnded, SegmentClosed
@@ -70,6 +77,8 @@ __all__ = ["Frames", "OnlineSegmenter", "frames_of"]
 _BLOCK = 256
 #: Adaptive threshold: recomputed every this many frames.
 _EVERY = 8
+#: Zero-phase segment filter: raw frames before a segment's start that it also filters.
+_LEAD = 32
 
 
 @dataclass(frozen=True)
@@ -159,6 +168,9 @@ class OnlineSegmenter:
         Window of the adaptive threshold's 95th percentile of ``z`` (default 10 s).
     min_travel_deg : float, degrees
         Travel that makes a run of ``z ≥ c`` a movement (SEG-2's, default 5°).
+    segment_filter : {"zero_phase", "causal"}
+        Values a closed segment is described by (module docstring; default
+        ``"zero_phase"``).
     """
 
     def __init__(
@@ -171,11 +183,17 @@ class OnlineSegmenter:
         max_segment: float = 10.0,
         speed_window: float = 10.0,
         min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
+        segment_filter: str = "zero_phase",
     ) -> None:
         model._check_fitted()
         c = getattr(model, "seg2_threshold_", None)
         if c is None or not (c > 0):
             raise ValueError("the model has no fitted SEG-2 constant (seg2_threshold_)")
+        if segment_filter not in ("zero_phase", "causal"):
+            raise ValueError(
+                f"segment_filter must be 'zero_phase' or 'causal', got {segment_filter!r}"
+            )
+        self.segment_filter = segment_filter
         if threshold not in ("fixed", "adaptive"):
             raise ValueError(f"threshold must be 'fixed' or 'adaptive', got {threshold!r}")
         for name, v in (("rest_timeout", rest_timeout), ("max_segment", max_segment)):
@@ -204,6 +222,7 @@ class OnlineSegmenter:
         self._vector_periodic = periodic_channels(self.features, len(self.arms))
         self._n_channels = int(model.n_channels)
         self._ring: FrameRing | None = None
+        self._raw: FrameRing | None = None
         self._times: FrameRing | None = None
         self._z: FrameRing | None = None
         self._last_angles: NDArray[np.float64] | None = None
@@ -240,6 +259,8 @@ class OnlineSegmenter:
     def _allocate(self, period: float) -> None:
         n = max(8, int(math.ceil(self.max_segment / period)) + 4)
         self._ring = FrameRing(n + _BLOCK + 4, self._n_channels)
+        if self.segment_filter == "zero_phase":
+            self._raw = FrameRing(n + _BLOCK + 4 + _LEAD, 4 * len(self.arms))
         self._times = FrameRing(n + _BLOCK + 4, 1)
         w = max(8, int(math.ceil(self.speed_window / period)))
         self._z = FrameRing(w + _BLOCK + 4, 1)
@@ -249,12 +270,17 @@ class OnlineSegmenter:
     @property
     def buffer_bytes(self) -> int:
         """Bytes held by the ring buffers (fixed once the first chunk set them up)."""
-        return sum(r.nbytes for r in (self._ring, self._times, self._z) if r is not None)
+        rings = (self._ring, self._raw, self._times, self._z)
+        return sum(r.nbytes for r in rings if r is not None)
 
     # ------------------------------------------------------------------ input
 
     def values_of(self, frames: Frames) -> NDArray[np.float64]:
         """The model's per-frame channels of a chunk, causally low-passed (stages 1–3)."""
+        return from_angles(self.lowpass(self.angles_of(frames)), self.features)
+
+    def angles_of(self, frames: Frames) -> NDArray[np.float64]:
+        """The raw arm angles of a chunk (stage 1), continuous with the previous chunk's."""
         single = len(frames) == 1
         # Bone directions are exact for any γ, so the causal IK takes γ and α from atan2
         # on every frame (no interpolation through the singular cones, which needs later
@@ -269,14 +295,16 @@ class OnlineSegmenter:
             turns = np.round((self._last_angles[p] - angles[0, p]) / (2 * np.pi))
             angles[:, p] += 2 * np.pi * turns
         self._last_angles = angles[-1].copy()
-        return from_angles(self.lowpass(angles), self.features)
+        return angles
 
     def push(self, frames: Frames) -> list[SegmentClosed | MovementEnded]:
         """Add a chunk; returns the segments closed and movements ended, in order."""
         out: list[SegmentClosed | MovementEnded] = []
         for a in range(0, len(frames), _BLOCK):
             part = frames.part(a, min(len(frames), a + _BLOCK))
-            out.extend(self._push_block(self.values_of(part), part.times))
+            angles = self.angles_of(part)
+            values = from_angles(self.lowpass(angles), self.features)
+            out.extend(self._push_block(values, part.times, angles))
         return out
 
     def push_values(
@@ -290,7 +318,10 @@ class OnlineSegmenter:
         return out
 
     def _push_block(
-        self, values: NDArray[np.float64], times: NDArray[np.float64]
+        self,
+        values: NDArray[np.float64],
+        times: NDArray[np.float64],
+        angles: NDArray[np.float64] | None = None,
     ) -> list[SegmentClosed | MovementEnded]:
         k = times.shape[0]
         if k == 0:
@@ -306,6 +337,11 @@ class OnlineSegmenter:
             raise ValueError("timestamps within a chunk must be finite and increasing")
         assert self._ring is not None and self._times is not None
         self._ring.extend(values)
+        if self._raw is not None:
+            if angles is None:  # push_values: no raw angles, the causal values describe
+                self._raw = None
+            else:
+                self._raw.extend(angles)
         self._times.extend(times[:, None])
         self.n_frames += k
         self._prev_frame_time = float(times[-1])
@@ -331,6 +367,8 @@ class OnlineSegmenter:
         self._reset_state()
         if self._ring is not None:
             self._ring.end = self._times.end = self._z.end = 0  # type: ignore[union-attr]
+            if self._raw is not None:
+                self._raw.end = 0
 
     # ------------------------------------------------------------------ z
 
@@ -452,7 +490,7 @@ class OnlineSegmenter:
             self._last_stop = f
         # Forced cut of an over-long segment.
         if self._open and f - self._boundary >= self._max_frames - 1:
-            out.append(self._close(self._boundary, f, emitted, forced=True))
+            out.append(self._close(self._boundary, f, emitted, forced=True, upto=f + 2))
             self._boundary = f
             self._gap_min = (math.inf, -1)
         # End of the movement after the rest timeout.
@@ -478,7 +516,7 @@ class OnlineSegmenter:
         b = self._gap_min[1]
         if b < 0 or b <= self._boundary:
             return
-        out.append(self._close(self._boundary, b, emitted, forced=False))
+        out.append(self._close(self._boundary, b, emitted, forced=False, upto=f + 2))
         self._boundary = b
 
     def _end_movement(
@@ -495,7 +533,8 @@ class OnlineSegmenter:
         if self._in_run and final:
             end = self.n_frames - 1
         if end > self._boundary:
-            out.append(self._close(self._boundary, end, emitted, forced=False))
+            upto = self.n_frames if final else f + 2
+            out.append(self._close(self._boundary, end, emitted, forced=False, upto=upto))
         out.append(
             MovementEnded(
                 start=self._movement_start,
@@ -534,10 +573,27 @@ class OnlineSegmenter:
         t1 = float(self._times.frame(first + 1)[0]) if self._times.end > first + 1 else t0
         return t0 - (first - f) * (t1 - t0)
 
-    def _close(self, a: int, b: int, emitted: float, *, forced: bool) -> SegmentClosed:
+    def _segment_values(self, a: int, b: int, upto: int) -> NDArray[np.float64]:
+        """Values of frames ``[a, b]``: causal, or the raw angles of ``[a − _LEAD, upto)``
+        through the model's zero-phase filter (module docstring)."""
+        assert self._ring is not None
+        if self._raw is None:
+            return self._ring.window(a, b + 1)
+        upto = min(upto, self._raw.end)
+        lo = max(self._raw.start, a - _LEAD)
+        raw = self._raw.window(lo, upto)
+        smooth = lowpass(
+            raw,
+            order=int(self.model.filter_order),
+            cutoff=float(self.model.cutoff),
+            short="reduce",
+        )
+        return from_angles(smooth[a - lo : b + 1 - lo], self.features)
+
+    def _close(self, a: int, b: int, emitted: float, *, forced: bool, upto: int) -> SegmentClosed:
         assert self._ring is not None
         a = max(a, self._ring.start)
-        values = self._ring.window(a, b + 1)
+        values = self._segment_values(a, b, upto)
         start, end = self._movement_time(a), self._movement_time(b)
         sv = vectors_from_frames(
             values,

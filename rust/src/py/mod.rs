@@ -9,6 +9,7 @@ mod dtw_online;
 mod errors;
 mod linalg;
 mod signal;
+mod sosfilt_online;
 mod triangulate;
 
 /// The compiled extension `visprim._visprim`; its public face is `visprim.kernels`.
@@ -21,6 +22,7 @@ fn _visprim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     linalg::register(m)?;
     dtw::register(m)?;
     dtw_online::register(m)?;
+    sosfilt_online::register(m)?;
     triangulate::register(m)?;
     Ok(())
 }
