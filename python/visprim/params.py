@@ -546,3 +546,76 @@ TRIANGULATION_MAX_REPROJECTION_PX: float = 15.0
 VIDEO_LOWPASS_HZ: float | None = None
 #: Butterworth order of that low-pass (forward and backward, so twice this in effect).
 VIDEO_LOWPASS_ORDER: int = 4
+
+
+# ---------------------------------------------------------------------------- online pipeline
+
+#: SEG-2's least travel of a movement (degrees), offline (:mod:`visprim.segment.seg2`) and
+#: online alike.
+SEG2_MIN_TRAVEL_DEG: float = 5.0
+
+
+@dataclass(frozen=True)
+class OnlineOption:
+    """One setting of the online pipeline (:class:`visprim.online.OnlinePipeline` and its
+    segmenter; ``visprim watch``): default, unit, allowed choices and what it means."""
+
+    name: str
+    default: Any
+    help: str
+    unit: str = ""
+    choices: tuple[Any, ...] | None = None
+
+
+#: Every setting of the online pipeline, declared once: the segmenter's and the pipeline's
+#: defaults and the options of ``visprim watch`` read this (measurements behind the defaults:
+#: docs/online.rst, ``benches/bench_online.py``).
+ONLINE_OPTIONS: Mapping[str, OnlineOption] = {
+    o.name: o
+    for o in (
+        OnlineOption(
+            "filter_order",
+            2,
+            "order of the causal Butterworth low-pass, at the model's cutoff (None: the "
+            "model's own order)",
+        ),
+        OnlineOption(
+            "threshold",
+            "adaptive",
+            "SEG-2 threshold: c lowered for slow movers as the offline robust tuning does "
+            "('adaptive', from the 95th percentile of the recent squared speed), or c as "
+            "fitted ('fixed')",
+            choices=("adaptive", "fixed"),
+        ),
+        OnlineOption(
+            "rest_timeout",
+            1.0,
+            "a movement ends after this long without a segment",
+            "s",
+        ),
+        OnlineOption("max_segment", 10.0, "a segment is closed after at most this long", "s"),
+        OnlineOption(
+            "speed_window", 10.0, "window of the adaptive threshold's recent squared speed", "s"
+        ),
+        OnlineOption(
+            "min_travel_deg",
+            SEG2_MIN_TRAVEL_DEG,
+            "travel that makes a run of fast frames a movement (the offline SEG-2's "
+            "DEFAULT_MIN_TRAVEL_DEG)",
+            "deg",
+        ),
+        OnlineOption(
+            "segment_filter",
+            "zero_phase",
+            "a closed segment is described after the model's zero-phase filter over the "
+            "frames received ('zero_phase') or after the causal one ('causal')",
+            choices=("zero_phase", "causal"),
+        ),
+        OnlineOption(
+            "max_movement",
+            60.0,
+            "frames of the movement in progress kept for a whole-movement classifier",
+            "s",
+        ),
+    )
+}

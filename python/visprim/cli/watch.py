@@ -238,6 +238,36 @@ def open_source(args: argparse.Namespace, model: Any) -> tuple[Any, str]:
 # ---------------------------------------------------------------------------- run
 
 
+def add_online_options(p: argparse.ArgumentParser) -> None:
+    """One option per setting of :data:`visprim.params.ONLINE_OPTIONS` (not given: the
+    declared default applies)."""
+    from visprim.params import ONLINE_OPTIONS
+
+    g = p.add_argument_group("online pipeline (visprim.online)")
+    for o in ONLINE_OPTIONS.values():
+        unit = f" {o.unit}" if o.unit else ""
+        kw: dict[str, Any] = {
+            "default": argparse.SUPPRESS,
+            "help": f"{o.help} (default {o.default}{unit})",
+        }
+        if o.choices is not None:
+            kw["choices"] = o.choices
+        elif isinstance(o.default, int):
+            kw["type"] = common.positive_int
+            kw["metavar"] = "N"
+        else:
+            kw["type"] = common.positive_float
+            kw["metavar"] = (o.unit or "X").upper()
+        g.add_argument("--" + o.name.replace("_", "-"), **kw)
+
+
+def online_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The online settings given on the command line, by name."""
+    from visprim.params import ONLINE_OPTIONS
+
+    return {name: getattr(args, name) for name in ONLINE_OPTIONS if hasattr(args, name)}
+
+
 def run(args: argparse.Namespace) -> int:
     from visprim.online import OnlinePipeline, SegmentClosed, event_to_dict
 
@@ -248,7 +278,7 @@ def run(args: argparse.Namespace) -> int:
     )
     model = common.load_model(args.model)
     classifier = fit_classifier(args, model)
-    pipe = OnlinePipeline(model, classifier)
+    pipe = OnlinePipeline(model, classifier, **online_options(args))
     adonis = None
     if args.adonis:
         from visprim.online.adonis import LiveAdonis
@@ -396,5 +426,6 @@ def register(sub: Any) -> None:
         metavar="SECONDS",
         help="lsl:NAME: how long to look for the stream (default 10)",
     )
+    add_online_options(p)
     common.add_reader_options(p, many=False)
     p.set_defaults(func=run)

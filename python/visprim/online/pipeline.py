@@ -41,6 +41,7 @@ from visprim.online.events import ClassUpdate, Event, MovementEnded, SegmentClos
 from visprim.online.movement import MovementFrames, WholeMovementClassifier
 from visprim.online.recogniser import OnlineRecogniser
 from visprim.online.segmenter import Frames, OnlineSegmenter, frames_of
+from visprim.params import ONLINE_OPTIONS
 from visprim.trial import Trial
 
 __all__ = ["OnlinePipeline"]
@@ -68,7 +69,7 @@ class OnlinePipeline:
         model: PrimitiveModel,
         classifier: Any = None,
         *,
-        max_movement: float = 60.0,
+        max_movement: float = ONLINE_OPTIONS["max_movement"].default,
         **options: Any,
     ) -> None:
         self.segmenter = OnlineSegmenter(model, **options)

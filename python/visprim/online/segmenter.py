@@ -61,9 +61,9 @@ from visprim.model import PrimitiveModel
 from visprim.online.events import MovementEnded, SegmentClosed
 from visprim.online.lowpass import CausalLowpass
 from visprim.online.ring import FrameRing
+from visprim.params import ONLINE_OPTIONS
 from visprim.segment.seg2 import (
     _STILL,
-    DEFAULT_MIN_TRAVEL_DEG,
     ROBUST_FRACTION,
     ROBUST_REST,
     ROBUST_SLOWEST,
@@ -72,6 +72,9 @@ from visprim.trial import Trial
 from visprim.vectors import amplitude_gains, vectors_from_frames
 
 __all__ = ["Frames", "OnlineSegmenter", "frames_of"]
+
+#: The defaults (:data:`visprim.params.ONLINE_OPTIONS`).
+_O: dict[str, Any] = {o.name: o.default for o in ONLINE_OPTIONS.values()}
 
 #: Frames processed per step of the state machine (a longer chunk is split).
 _BLOCK = 256
@@ -177,13 +180,13 @@ class OnlineSegmenter:
         self,
         model: PrimitiveModel,
         *,
-        filter_order: int | None = 2,
-        threshold: str = "adaptive",
-        rest_timeout: float = 1.0,
-        max_segment: float = 10.0,
-        speed_window: float = 10.0,
-        min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
-        segment_filter: str = "zero_phase",
+        filter_order: int | None = _O["filter_order"],
+        threshold: str = _O["threshold"],
+        rest_timeout: float = _O["rest_timeout"],
+        max_segment: float = _O["max_segment"],
+        speed_window: float = _O["speed_window"],
+        min_travel_deg: float = _O["min_travel_deg"],
+        segment_filter: str = _O["segment_filter"],
     ) -> None:
         model._check_fitted()
         c = getattr(model, "seg2_threshold_", None)

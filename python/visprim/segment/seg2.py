@@ -92,7 +92,7 @@ __all__ = [
 
 #: A movement run counts as a movement (not jitter) when the arm travels more than this in
 #: joint space during it, degrees.
-DEFAULT_MIN_TRAVEL_DEG: float = 5.0
+DEFAULT_MIN_TRAVEL_DEG: float = params.SEG2_MIN_TRAVEL_DEG
 _PLATEAU = 0.98
 _N_GRID = 64
 _MAX_TRIALS = 2000
