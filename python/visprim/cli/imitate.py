@@ -53,6 +53,13 @@ def run(args: argparse.Namespace) -> int:
         if not Path(path).is_file():
             raise common.UsageError(f"{what} {path!r} not found")
     video = None if args.no_video else args.video
+    if video is None and not args.no_video:
+        from visprim.progress import write
+        from visprim.sim.video import default_video_name
+
+        video, why = default_video_name("imitation")
+        if why:
+            write(f"visprim imitate: {why}")
     if video is not None and args.size < MIN_SIZE:
         raise common.UsageError(
             f"--size {args.size}: the video's panels must be at least {MIN_SIZE} pixels"
@@ -69,6 +76,11 @@ def run(args: argparse.Namespace) -> int:
             raise common.UsageError(
                 f"--video {video}: unsupported video format; name it .gif or .mp4 "
                 f"({', '.join(f'{e}: {w}' for e, w in VIDEO_FORMATS.items())})"
+            ) from None
+        except ImportError:
+            raise common.UsageError(
+                f"--video {video}: writing .mp4 needs imageio-ffmpeg: pip install "
+                "'visprim[video]' (or name it .gif)"
             ) from None
     if args.budget is not None and (args.source != "primitives" or not args.budget > 0):
         raise common.UsageError(
@@ -150,8 +162,10 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         "--video",
-        default="imitation.gif",
-        help="video file name in DIR: .gif, or .mp4 with visprim[video] (default imitation.gif)",
+        default=None,
+        help="video file name in DIR: .mp4 (needs imageio-ffmpeg, in visprim[video]) or .gif "
+        "(default imitation.mp4, or imitation.gif without imageio-ffmpeg); a video recording "
+        "shows its own frames with the detected arm beside Adonis",
     )
     p.add_argument("--no-video", action="store_true", help="write no video")
     p.add_argument("--size", type=int, default=480, help="panel size in pixels (default 480)")

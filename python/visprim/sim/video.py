@@ -51,6 +51,20 @@ def check_video_path(path: str | Path) -> Path:
     return out
 
 
+def default_video_name(stem: str) -> tuple[str, str | None]:
+    """``stem.mp4`` when imageio-ffmpeg is installed, else ``stem.gif`` with the reason (one
+    line to show the user)."""
+    try:
+        import imageio_ffmpeg  # noqa: F401
+    except ImportError:
+        return (
+            f"{stem}.gif",
+            f"imageio-ffmpeg is not installed (pip install 'visprim[video]'): writing "
+            f"{stem}.gif instead of {stem}.mp4",
+        )
+    return f"{stem}.mp4", None
+
+
 def _frame_blocks(im: Image.Image) -> bytes:
     """The image blocks (descriptor with a local colour table, LZW data) of the palette
     image ``im``, as Pillow encodes it for a one-frame GIF."""
