@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from PIL import Image, ImageDraw, ImageFont
 
 from visprim.sim.playback import Playback
+from visprim.sim.trace import blocks
 
 #: Supersampling factor: frames are drawn this many times larger, then reduced.
 SUPERSAMPLE = 2
@@ -316,11 +317,15 @@ class PlaybackDrawer:
         if self.footer:
             self.labels.append(_Label(self.footer, TEXT_PX, "md", (w / 2, h), True, width=w))
         # Bodies that never move (the pelvis and legs) are projected once.
-        frames = playback.frames
-        still = np.abs(frames - frames[:1]).max(axis=(0, 2, 3)) < 1e-12
+        frames = playback.frames  # an array, or a Trace on disk: read a block at a time
+        first = np.asarray(frames[0])
+        moved = np.zeros(first.shape[0])
+        for _, block in blocks(frames):
+            moved = np.maximum(moved, np.abs(block - first).max(axis=(0, 2, 3)))
+        still = moved < 1e-12
         self.moving = np.flatnonzero(~still)
         self.static_items = p.body_items(
-            frames[0][still], [s for s, k in zip(playback.body_shapes, still, strict=True) if k]
+            first[still], [s for s, k in zip(playback.body_shapes, still, strict=True) if k]
         )
         self.moving_shapes = [playback.body_shapes[i] for i in self.moving]
         # Over the bodies: the target path and via points, then the path taken so far. Both
