@@ -10,9 +10,10 @@
 
 Frames are drawn in a second thread while the first encodes (:func:`prefetched`, a queue
 of :data:`PREFETCH` frames), so drawing and encoding share the machine's cores and memory
-still holds a few frames. Any other extension is refused with a message naming the supported ones. The file is written
-under a temporary name in the target's folder and renamed over the target at the end
-(:func:`os.replace`), so a failure never leaves a half-written video.
+still holds a few frames. Any other extension is refused with a message naming the
+supported ones. The file is written under a temporary name in the target's folder and
+renamed over the target at the end (:func:`os.replace`), so a failure never leaves a
+half-written video.
 """
 
 from __future__ import annotations
