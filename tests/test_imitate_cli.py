@@ -113,6 +113,29 @@ def test_imitate_checks_folders_and_size_up_front(files, tmp_path, capsys) -> No
     )
 
 
+@pytest.mark.parametrize(
+    ("option", "value"),
+    [("--size", "100000"), ("--dt", "0"), ("--dt", "nan"), ("--dt", "-1"), ("--dt", "0.5")],
+)
+def test_a_size_or_step_out_of_range_is_refused_before_any_work(
+    files, tmp_path, capsys, monkeypatch, option, value
+) -> None:
+    """A panel of 100,000 px once ran the machine out of memory after the simulation; a bad
+    step failed only after the recording was read and rebuilt."""
+    import visprim.imitate
+
+    def never(*args, **kwargs):
+        raise AssertionError("imitate ran")
+
+    monkeypatch.setattr(visprim.imitate, "imitate", never)
+    model, rec, _ = files
+    out = tmp_path / "x"
+    assert main(["imitate", str(model), str(rec), "--out", str(out), option, value]) == 2
+    err = capsys.readouterr().err
+    assert f"{option} " in err and err.count("\n") == 1
+    assert not out.exists()
+
+
 def test_export_robot_writes_urdf_and_primitive_trajectories(files, tmp_path, capsys) -> None:
     model, _, k = files
     urdf = tmp_path / "adonis.urdf"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 from typing import Any
 
@@ -22,8 +23,12 @@ def read_recording(args: argparse.Namespace, path: str, model: Any) -> Any:
     return read(path, arm, **opts)
 
 
-#: Smallest video panel, pixels (as :mod:`visprim.sim.render` draws them).
+#: Smallest and largest video panel, pixels (a panel is drawn at twice its size: 4096 px
+#: is a 64 MB canvas).
 MIN_SIZE = 64
+MAX_SIZE = 4096
+#: Largest simulation step, seconds: the via points' spacing (0.1 s).
+MAX_DT = 0.1
 _RECORDING_SUFFIXES = (".bvh", ".amc", ".c3d", ".csv", ".trc")
 
 
@@ -60,9 +65,13 @@ def run(args: argparse.Namespace) -> int:
         video, why = default_video_name("imitation")
         if why:
             write(f"visprim imitate: {why}")
-    if video is not None and args.size < MIN_SIZE:
+    if video is not None and not MIN_SIZE <= args.size <= MAX_SIZE:
         raise common.UsageError(
-            f"--size {args.size}: the video's panels must be at least {MIN_SIZE} pixels"
+            f"--size {args.size}: the video's panels must be {MIN_SIZE} to {MAX_SIZE} pixels"
+        )
+    if args.dt is not None and not (math.isfinite(args.dt) and 0 < args.dt <= MAX_DT):
+        raise common.UsageError(
+            f"--dt {args.dt}: the simulation step must be a number of seconds in (0, {MAX_DT}]"
         )
     if video is not None:
         if Path(video).name != video or video in (".", ".."):
