@@ -6,7 +6,9 @@ generated movements. Each length runs ``visprim imitate MODEL REC --out DIR --vi
 (stable servo, 480 px panels; ``--video`` picks the format, default ``imitation.gif``) in a
 child process, ``--repeats`` runs per length (median [min, max]). Figures per run:
 
-* wall time of the child, seconds;
+* wall time of the child, seconds, and its CPU time (user + system, the child and the
+  processes it waited for): on a shared machine the CPU time says what the run costs, the
+  wall time what the load made of it;
 * peak resident memory of the child, ``ru_maxrss`` from ``wait4`` (the Python process;
   for ``.mp4`` the encoder is a second process, counted in the next figure);
 * peak resident memory of the child's whole process tree (the sum of every process's RSS,
@@ -76,8 +78,9 @@ def _tree_rss(pid: int) -> int:
     return total
 
 
-def run_once(argv: list[str]) -> tuple[float, float, float]:
-    """(wall seconds, child ru_maxrss MB, process tree peak MB) of one child run."""
+def run_once(argv: list[str]) -> tuple[float, float, float, float]:
+    """(wall seconds, CPU seconds, child ru_maxrss MB, process tree peak MB) of one child
+    run."""
     t0 = time.perf_counter()
     proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     peak = [0]
@@ -97,7 +100,8 @@ def run_once(argv: list[str]) -> tuple[float, float, float]:
     sampler.join()
     if os.waitstatus_to_exitcode(status) != 0:
         raise SystemExit(f"failed: {' '.join(argv)}\n{err}")
-    return wall, usage.ru_maxrss / 1024.0, peak[0] / 2**20
+    cpu = usage.ru_utime + usage.ru_stime
+    return wall, cpu, usage.ru_maxrss / 1024.0, peak[0] / 2**20
 
 
 def _commit() -> str:
@@ -157,26 +161,30 @@ def main() -> None:
     )
     trials = imitation_experiment(2, 6, seed=3)
     model = PrimitiveModel(n_clusters=8, n_init=2, seed=0).fit(trials[:-1])
-    print("| recording | frames | wall s | peak RSS MB, Python | peak RSS MB, process tree |")
-    print("|---|---|---|---|---|")
+    print(
+        "| recording | frames | wall s | CPU s | peak RSS MB, Python | peak RSS MB, process tree |"
+    )
+    print("|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory(prefix="visprim-bench-long-") as tmp:
         root = Path(tmp)
         model.save(root / "model.npz")
         for minutes in args.minutes:
             rec = looped(trials[-1], minutes)
             path = write_marker_csv(root / f"{rec.name}.csv", rec, truth=False)
-            walls, rss, tree = [], [], []
+            walls, cpus, rss, tree = [], [], [], []
             for k in range(args.repeats):
                 out = root / f"out_{minutes:g}_{k}"
                 argv = [sys.executable, "-m", "visprim.cli", "-q", "imitate"]
                 argv += [str(root / "model.npz"), str(path), "--out", str(out)]
                 argv += ["--size", str(args.size), "--video", args.video]
-                wall, mb, tree_mb = run_once(argv)
+                wall, cpu, mb, tree_mb = run_once(argv)
                 walls.append(wall)
+                cpus.append(cpu)
                 rss.append(mb)
                 tree.append(tree_mb)
             print(
                 f"| {minutes:g} min | {rec.n_frames} | {_spread(walls, '.0f')} | "
+                f"{_spread(cpus, '.0f')} | "
                 f"{_spread(rss, '.0f')} | {_spread(tree, '.0f')} |",
                 flush=True,
             )
