@@ -327,7 +327,7 @@ def play(
         completion_time=completion,
         movement_duration=ref.duration,
         reached_all=bool(reached.all()),
-        via_times=ref.via_steps * dt,
+        via_times=ref.via_steps.astype(np.float64) * dt,
         via_reach_times=reach_times.copy(),
         frame_times=out["frame_steps"] * dt,
         frames=out["frames"],

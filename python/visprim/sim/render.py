@@ -370,8 +370,8 @@ class PlaybackDrawer:
                 self._dot(draw, j, False)
         if np.any(reached & ~self._reached):
             draw = ImageDraw.Draw(self._marks)
-            for j in np.flatnonzero(reached & ~self._reached):
-                self._dot(draw, int(j), True)
+            for hit in np.flatnonzero(reached & ~self._reached).tolist():
+                self._dot(draw, hit, True)
             self._reached = reached
         if self._path is None or index < self._path_end:
             self._path, self._path_end, self._path_box = self._layer(), 0, None

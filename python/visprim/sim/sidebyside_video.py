@@ -210,7 +210,7 @@ def _decoded(path: Path, step: int, n: int) -> Iterator[tuple[int, NDArray[np.ui
             if not ok:
                 break
             if k % step == 0:
-                yield k, cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)
+                yield k, np.asarray(cv2.cvtColor(frame, cv2.COLOR_BGR2RGB), dtype=np.uint8)
             k += 1
     finally:
         cap.release()
