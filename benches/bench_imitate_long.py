@@ -1,31 +1,48 @@
-"""``visprim imitate`` (with its GIF video) on long recordings: wall time and peak memory.
+"""``visprim imitate`` with its video on long recordings: wall time and peak memory.
 
 The recording is a generated movement looped forward and back to the length asked for
-(2.5, 10 and 30 min by default), written as a marker CSV; the model is learned on other
-generated movements. Each length runs ``visprim imitate MODEL REC --out DIR`` (default
-options: stable servo, 480 px panels, imitation.gif) in a child process; the figures are the
-child's wall time and peak resident memory (``ru_maxrss`` from ``wait4``), ``--repeats``
-runs per length (median, [min, max]).
+(2.5, 5, 10 and 30 min by default), written as a marker CSV; the model is learned on other
+generated movements. Each length runs ``visprim imitate MODEL REC --out DIR --video NAME``
+(stable servo, 480 px panels; ``--video`` picks the format, default ``imitation.gif``) in a
+child process, ``--repeats`` runs per length (median [min, max]). Figures per run:
 
-Run: ``PYTHONPATH=python .venv/bin/python benches/bench_imitate_long.py [--minutes 2.5 10]``
+* wall time of the child, seconds, and its CPU time (user + system, the child and the
+  processes it waited for): on a shared machine the CPU time says what the run costs, the
+  wall time what the load made of it;
+* peak resident memory of the child, ``ru_maxrss`` from ``wait4`` (the Python process;
+  for ``.mp4`` the encoder is a second process, counted in the next figure);
+* peak resident memory of the child's whole process tree (the sum of every process's RSS,
+  sampled from ``/proc`` every 50 ms);
+* the targets: 5 min ≤ 60 s and ≤ 1 GB, 30 min ≤ 1.5 GB.
+
+The output is stamped: date, commit, CPU, ``instruction_set()``, and the load average at the
+start and the end (the machine may be shared: the load says how much).
+
+Run: ``PYTHONPATH=python .venv/bin/python benches/bench_imitate_long.py [--minutes 5 30]``
 """
 
 from __future__ import annotations
 
 import argparse
+import datetime
 import os
+import platform
 import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
 import numpy as np
-from visprim import PrimitiveModel
+from visprim import PrimitiveModel, kernels
 from visprim.datasets import imitation_experiment
 from visprim.io.markers_csv import write_marker_csv
 from visprim.trial import Trial
+
+ROOT = Path(__file__).resolve().parents[1]
+PAGE = os.sysconf("SC_PAGE_SIZE")
 
 
 def looped(trial: Trial, minutes: float) -> Trial:
@@ -38,50 +55,141 @@ def looped(trial: Trial, minutes: float) -> Trial:
     return Trial(times=np.arange(n) * period, markers=markers, name=f"looped_{minutes:g}min")
 
 
-def run_once(argv: list[str]) -> tuple[float, float]:
-    """(wall seconds, peak RSS in MB) of one child run of ``argv``."""
+def _tree_rss(pid: int) -> int:
+    """Sum of the resident memory (bytes) of ``pid`` and its descendants."""
+    children: dict[int, list[int]] = {}
+    rss: dict[int, int] = {}
+    for entry in os.listdir("/proc"):
+        if not entry.isdigit():
+            continue
+        try:
+            with open(f"/proc/{entry}/stat", encoding="ascii", errors="replace") as fh:
+                fields = fh.read().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        p = int(entry)
+        children.setdefault(int(fields[1]), []).append(p)
+        rss[p] = int(fields[21]) * PAGE
+    total, todo = 0, [pid]
+    while todo:
+        p = todo.pop()
+        total += rss.get(p, 0)
+        todo += children.get(p, [])
+    return total
+
+
+def run_once(argv: list[str]) -> tuple[float, float, float, float]:
+    """(wall seconds, CPU seconds, child ru_maxrss MB, process tree peak MB) of one child
+    run."""
     t0 = time.perf_counter()
     proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    peak = [0]
+    done = threading.Event()
+
+    def sample() -> None:
+        while not done.is_set():
+            peak[0] = max(peak[0], _tree_rss(proc.pid))
+            done.wait(0.05)
+
+    sampler = threading.Thread(target=sample, daemon=True)
+    sampler.start()
+    err = proc.stderr.read().decode(errors="replace") if proc.stderr else ""
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - t0
-    err = proc.stderr.read().decode() if proc.stderr else ""
+    done.set()
+    sampler.join()
     if os.waitstatus_to_exitcode(status) != 0:
         raise SystemExit(f"failed: {' '.join(argv)}\n{err}")
-    return wall, usage.ru_maxrss / 1024.0
+    cpu = usage.ru_utime + usage.ru_stime
+    return wall, cpu, usage.ru_maxrss / 1024.0, peak[0] / 2**20
+
+
+def _commit() -> str:
+    try:
+        out = subprocess.run(
+            ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        dirty = subprocess.run(
+            ["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        return out.stdout.strip() + (" (modified)" if dirty.stdout.strip() else "")
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def _cpu() -> str:
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def _spread(values: list[float], fmt: str) -> str:
+    med = statistics.median(values)
+    return f"{med:{fmt}} [{min(values):{fmt}}, {max(values):{fmt}}]"
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--minutes", type=float, nargs="+", default=[2.5, 10.0, 30.0])
+    ap.add_argument("--minutes", type=float, nargs="+", default=[2.5, 5.0, 10.0, 30.0])
     ap.add_argument("--repeats", type=int, default=1)
     ap.add_argument("--size", type=int, default=480)
+    ap.add_argument("--video", default="imitation.gif", help="video name (.gif or .mp4)")
     args = ap.parse_args()
+    load0 = os.getloadavg()
+    print(
+        f"# imitate on long recordings — {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M UTC}"
+    )
+    print(
+        f"commit {_commit()} · CPU {_cpu()} · {os.cpu_count()} cores · instruction set "
+        f"{kernels.instruction_set()} · Python {sys.version.split()[0]}"
+    )
+    print(f"load average at start: {load0[0]:.1f} / {load0[1]:.1f} / {load0[2]:.1f} (1/5/15 min)")
+    print(
+        f"video {args.video}, {args.size} px panels, stable servo; {args.repeats} run(s) per "
+        "length, median [min, max]\n"
+    )
     trials = imitation_experiment(2, 6, seed=3)
     model = PrimitiveModel(n_clusters=8, n_init=2, seed=0).fit(trials[:-1])
+    print(
+        "| recording | frames | wall s | CPU s | peak RSS MB, Python | peak RSS MB, process tree |"
+    )
+    print("|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory(prefix="visprim-bench-long-") as tmp:
         root = Path(tmp)
         model.save(root / "model.npz")
-        print(f"imitate with video, {args.size} px panels; {args.repeats} run(s) per length")
-        print("| recording | frames | wall s (median [min, max]) | peak RSS MB |")
-        print("|---|---|---|---|")
         for minutes in args.minutes:
             rec = looped(trials[-1], minutes)
             path = write_marker_csv(root / f"{rec.name}.csv", rec, truth=False)
-            walls, rss = [], []
+            walls, cpus, rss, tree = [], [], [], []
             for k in range(args.repeats):
                 out = root / f"out_{minutes:g}_{k}"
                 argv = [sys.executable, "-m", "visprim.cli", "-q", "imitate"]
                 argv += [str(root / "model.npz"), str(path), "--out", str(out)]
-                argv += ["--size", str(args.size)]
-                wall, mb = run_once(argv)
+                argv += ["--size", str(args.size), "--video", args.video]
+                wall, cpu, mb, tree_mb = run_once(argv)
                 walls.append(wall)
+                cpus.append(cpu)
                 rss.append(mb)
+                tree.append(tree_mb)
             print(
-                f"| {minutes:g} min | {rec.n_frames} | {statistics.median(walls):.0f} "
-                f"[{min(walls):.0f}, {max(walls):.0f}] | {statistics.median(rss):.0f} "
-                f"[{min(rss):.0f}, {max(rss):.0f}] |",
+                f"| {minutes:g} min | {rec.n_frames} | {_spread(walls, '.0f')} | "
+                f"{_spread(cpus, '.0f')} | "
+                f"{_spread(rss, '.0f')} | {_spread(tree, '.0f')} |",
                 flush=True,
             )
+    load1 = os.getloadavg()
+    print(f"\nload average at end: {load1[0]:.1f} / {load1[1]:.1f} / {load1[2]:.1f} (1/5/15 min)")
 
 
 if __name__ == "__main__":

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import json
 
 import pytest
@@ -9,6 +10,11 @@ from visprim import PrimitiveModel
 from visprim.cli.main import main
 from visprim.datasets import imitation_experiment
 from visprim.io.markers_csv import write_marker_csv
+
+#: The default video: MP4 with imageio-ffmpeg, else GIF.
+DEFAULT_VIDEO = (
+    "imitation.mp4" if importlib.util.find_spec("imageio_ffmpeg") is not None else "imitation.gif"
+)
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +36,7 @@ def test_imitate_writes_metrics_trajectories_and_video(files, tmp_path, capsys) 
     assert "primitives" in printed and "uncovered" in printed and "Adonis vs human" in printed
     names = {p.name for p in out.iterdir()}
     assert {"imitation.json", "imitation.csv", "trajectory.json", "trajectory.csv"} <= names
-    assert "imitation.gif" in names
+    assert DEFAULT_VIDEO in names
     doc = json.loads((out / "imitation.json").read_text())
     assert doc["adonis"]["servo"] == "stable" and doc["model"].endswith("model.npz")
     assert not [n for n in names if n.startswith(".") and "tmp" in n]  # no temporary files
@@ -43,6 +49,31 @@ def test_imitate_projection_is_labelled(files, tmp_path, capsys) -> None:
     assert main([*argv, "--source", "projection"]) == 0
     assert "NEAR-COPY" in capsys.readouterr().out
     assert json.loads((out / "imitation.json").read_text())["source"] == "projection"
+
+
+def test_without_imageio_ffmpeg_the_default_is_a_gif_and_says_so(files, tmp_path, capsys):
+    import builtins
+
+    real = builtins.__import__
+
+    def no_ffmpeg(name, *args, **kwargs):
+        if name == "imageio_ffmpeg":
+            raise ImportError(name)
+        return real(name, *args, **kwargs)
+
+    model, rec, _ = files
+    out = tmp_path / "g"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(builtins, "__import__", no_ffmpeg)
+        assert main(["imitate", str(model), str(rec), "--out", str(out), "--size", "64"]) == 0
+        err = capsys.readouterr().err
+        assert "imageio-ffmpeg is not installed" in err and "imitation.gif" in err
+        assert (out / "imitation.gif").is_file() and not (out / "imitation.mp4").exists()
+        out2 = tmp_path / "m"
+        argv = ["imitate", str(model), str(rec), "--out", str(out2), "--video", "v.mp4"]
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert "imageio-ffmpeg" in err and err.count("\n") == 1 and not out2.exists()
 
 
 def test_imitate_refuses_bad_input_in_one_line(files, tmp_path, capsys) -> None:
@@ -82,6 +113,29 @@ def test_imitate_checks_folders_and_size_up_front(files, tmp_path, capsys) -> No
     )
 
 
+@pytest.mark.parametrize(
+    ("option", "value"),
+    [("--size", "100000"), ("--dt", "0"), ("--dt", "nan"), ("--dt", "-1"), ("--dt", "0.5")],
+)
+def test_a_size_or_step_out_of_range_is_refused_before_any_work(
+    files, tmp_path, capsys, monkeypatch, option, value
+) -> None:
+    """A panel of 100,000 px once ran the machine out of memory after the simulation; a bad
+    step failed only after the recording was read and rebuilt."""
+    import visprim.imitate
+
+    def never(*args, **kwargs):
+        raise AssertionError("imitate ran")
+
+    monkeypatch.setattr(visprim.imitate, "imitate", never)
+    model, rec, _ = files
+    out = tmp_path / "x"
+    assert main(["imitate", str(model), str(rec), "--out", str(out), option, value]) == 2
+    err = capsys.readouterr().err
+    assert f"{option} " in err and err.count("\n") == 1
+    assert not out.exists()
+
+
 def test_export_robot_writes_urdf_and_primitive_trajectories(files, tmp_path, capsys) -> None:
     model, _, k = files
     urdf = tmp_path / "adonis.urdf"
@@ -117,4 +171,4 @@ def test_one_arm_primitives_imitate_both_arms_of_a_recording(shared_data, tmp_pa
     assert doc["adonis"]["vs_rebuild_joint_rms_deg"]["overall"] < 2.0
     header = (out / "imitation.csv").read_text().splitlines()[0]
     assert "adonis_left_elbow_rad" in header.split(",")
-    assert (out / "imitation.gif").stat().st_size > 0
+    assert (out / DEFAULT_VIDEO).stat().st_size > 0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 from typing import Any
 
@@ -22,8 +23,12 @@ def read_recording(args: argparse.Namespace, path: str, model: Any) -> Any:
     return read(path, arm, **opts)
 
 
-#: Smallest video panel, pixels (as :mod:`visprim.sim.render` draws them).
+#: Smallest and largest video panel, pixels (a panel is drawn at twice its size: 4096 px
+#: is a 64 MB canvas).
 MIN_SIZE = 64
+MAX_SIZE = 4096
+#: Largest simulation step, seconds: the via points' spacing (0.1 s).
+MAX_DT = 0.1
 _RECORDING_SUFFIXES = (".bvh", ".amc", ".c3d", ".csv", ".trc")
 
 
@@ -53,9 +58,20 @@ def run(args: argparse.Namespace) -> int:
         if not Path(path).is_file():
             raise common.UsageError(f"{what} {path!r} not found")
     video = None if args.no_video else args.video
-    if video is not None and args.size < MIN_SIZE:
+    if video is None and not args.no_video:
+        from visprim.progress import write
+        from visprim.sim.video import default_video_name
+
+        video, why = default_video_name("imitation")
+        if why:
+            write(f"visprim imitate: {why}")
+    if video is not None and not MIN_SIZE <= args.size <= MAX_SIZE:
         raise common.UsageError(
-            f"--size {args.size}: the video's panels must be at least {MIN_SIZE} pixels"
+            f"--size {args.size}: the video's panels must be {MIN_SIZE} to {MAX_SIZE} pixels"
+        )
+    if args.dt is not None and not (math.isfinite(args.dt) and 0 < args.dt <= MAX_DT):
+        raise common.UsageError(
+            f"--dt {args.dt}: the simulation step must be a number of seconds in (0, {MAX_DT}]"
         )
     if video is not None:
         if Path(video).name != video or video in (".", ".."):
@@ -69,6 +85,11 @@ def run(args: argparse.Namespace) -> int:
             raise common.UsageError(
                 f"--video {video}: unsupported video format; name it .gif or .mp4 "
                 f"({', '.join(f'{e}: {w}' for e, w in VIDEO_FORMATS.items())})"
+            ) from None
+        except ImportError:
+            raise common.UsageError(
+                f"--video {video}: writing .mp4 needs imageio-ffmpeg: pip install "
+                "'visprim[video]' (or name it .gif)"
             ) from None
     if args.budget is not None and (args.source != "primitives" or not args.budget > 0):
         raise common.UsageError(
@@ -150,8 +171,10 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         "--video",
-        default="imitation.gif",
-        help="video file name in DIR: .gif, or .mp4 with visprim[video] (default imitation.gif)",
+        default=None,
+        help="video file name in DIR: .mp4 (needs imageio-ffmpeg, in visprim[video]) or .gif "
+        "(default imitation.mp4, or imitation.gif without imageio-ffmpeg); a video recording "
+        "shows its own frames with the detected arm beside Adonis",
     )
     p.add_argument("--no-video", action="store_true", help="write no video")
     p.add_argument("--size", type=int, default=480, help="panel size in pixels (default 480)")

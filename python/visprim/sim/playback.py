@@ -40,10 +40,16 @@ from visprim.sim.sequencer import (
     LEFT_SHOULDER_JOINT,
     SHOULDER_JOINT,
     Reference,
+    ReferenceStream,
     ViaPointSequencer,
-    build_reference,
 )
 from visprim.sim.servo import ExplicitPD, JointGains, StablePD
+from visprim.sim.trace import Trace, TraceWriter
+
+#: Grid steps of the reference computed at once (positions, velocities, feedforward).
+WINDOW_STEPS = 4096
+#: Control steps recorded in memory before they are measured and stored.
+BLOCK_STEPS = 4096
 
 #: Joint speed (rad/s) beyond which a playback is declared diverged.
 DIVERGENCE_SPEED: float = 1.0e3
@@ -64,7 +70,10 @@ class Playback:
         Every control step (the simulation time step apart).
     q_target, q_actual : (N, 20) arrays, rad
         Set point and actual joint positions (ball joints: rotation vectors; order
-        ``dof_names``).
+        ``dof_names``). These per-step tables, ``joint_errors_deg`` and ``frames`` are
+        numpy arrays, or for a long playback (beyond :data:`visprim.sim.trace.SPILL_BYTES`
+        each) a :class:`visprim.sim.trace.Trace` on disk that indexes like one
+        (``np.asarray`` loads it): memory stays bounded whatever the length.
     joint_errors_deg : (N, n_joints) array, degrees
         Error of every joint with DOF (order ``joint_names``), see the module docstring.
     rms_error_deg, max_error_deg : float
@@ -101,9 +110,9 @@ class Playback:
     """
 
     times: NDArray[np.float64]
-    q_target: NDArray[np.float64]
-    q_actual: NDArray[np.float64]
-    joint_errors_deg: NDArray[np.float64]
+    q_target: NDArray[np.float64] | Trace
+    q_actual: NDArray[np.float64] | Trace
+    joint_errors_deg: NDArray[np.float64] | Trace
     rms_error_deg: float
     max_error_deg: float
     rest_max_error_deg: float
@@ -113,7 +122,7 @@ class Playback:
     via_times: NDArray[np.float64]
     via_reach_times: NDArray[np.float64]
     frame_times: NDArray[np.float64]
-    frames: NDArray[np.float64]
+    frames: NDArray[np.float64] | Trace
     hand_path: NDArray[np.float64]
     hand_reference: NDArray[np.float64]
     hand_via: NDArray[np.float64]
@@ -266,68 +275,63 @@ def play(
             raise ValueError(
                 f"model: the world's time step {world.getTimeStep()} s differs from dt = {dt} s"
             )
-    ref = build_reference(skel, times, angles, dt, via_spacing)
+    ref = ReferenceStream(skel, times, angles, dt, via_spacing)
     kinematics = BatchKinematics(skel)
     joint_names, slices = _joint_slices(skel)
-    positions, velocities = ref.positions, ref.velocities
     body_names = tuple(b.getName() for b in skel.getBodyNodes())
     hand_index = body_names.index("r_hand")
 
-    # Forward kinematics of the target (numpy; the skeleton is left alone).
+    # Forward kinematics of the target (numpy; the skeleton is left alone), a window at a
+    # time.
     ref_stride = max(1, int(round(0.01 / dt)))
-    ref_steps = np.unique(np.append(np.arange(0, ref.times.shape[0], ref_stride), ref.via_steps))
-    hand_reference = hand_points(kinematics.transforms(positions[ref_steps]), hand_index)
-    hand_via = hand_points(kinematics.transforms(positions[ref.via_steps]), hand_index)
+    ref_steps = np.unique(np.append(np.arange(0, ref.n_grid, ref_stride), ref.via_steps))
+    hand_reference = np.concatenate(
+        [
+            hand_points(kinematics.transforms(ref.positions_at(part)), hand_index)
+            for part in np.array_split(ref_steps, max(1, ref_steps.size // WINDOW_STEPS))
+        ]
+    )
+    hand_via = hand_points(kinematics.transforms(ref.positions_at(ref.via_steps)), hand_index)
 
+    first_q, first_v = ref.window(0, 1)
     world.reset()
     skel.resetCommands()
     skel.clearExternalForces()
-    skel.setPositions(positions[0])
-    skel.setVelocities(velocities[0])
+    skel.setPositions(first_q[0])
+    skel.setVelocities(first_v[0])
 
-    frame_stride = max(1, int(round(1.0 / (render_fps * dt))))
-    run: Any = _run_paper
-    wall0 = time.perf_counter()
-    if servo == "stable":
-        run = partial(_run_stable, feedforward=feedforward)
-    rec, seq_state = run(
-        world, skel, ref, slices, float(vicinity), float(timeout), gains, frame_stride
-    )
-    wall_time = time.perf_counter() - wall0
-    rec_q, rec_k, n_rec, completion, frame_steps = rec
-    reached, reach_times = seq_state
-    if not np.all(np.isfinite(rec_q[:n_rec])):
-        raise SimulationDiverged("play: the simulation produced NaN joint positions")
-    if frame_steps[-1] != n_rec - 1:
-        frame_steps.append(n_rec - 1)
-    # Body transforms at the frames, from the recorded joint positions (the same forward
-    # kinematics as DART's, vectorised after the run rather than queried in the loop).
-    frames_arr = kinematics.transforms(rec_q[frame_steps])
-
-    q_actual = rec_q[:n_rec].copy()
-    q_target = positions[rec_k[:n_rec]]
-    errors = joint_errors(skel, q_target, q_actual)
     driven = [SHOULDER_JOINT, ELBOW_JOINT]
     if np.shape(angles)[1] == 8:
         driven += [LEFT_SHOULDER_JOINT, LEFT_ELBOW_JOINT]
     arm = [joint_names.index(j) for j in driven]
-    rest = [i for i in range(len(joint_names)) if i not in arm]
+    frame_stride = max(1, int(round(1.0 / (render_fps * dt))))
+    rec = _Recorder(skel, kinematics, frame_stride, dt, arm, hand_index)
+    run: Any = _run_paper
+    wall0 = time.perf_counter()
+    if servo == "stable":
+        run = partial(_run_stable, feedforward=feedforward)
+    completion, (reached, reach_times) = run(
+        world, skel, ref, slices, float(vicinity), float(timeout), gains, rec, driven
+    )
+    wall_time = time.perf_counter() - wall0
+    out = rec.finish()
+    n_rec = out["n"]
     return Playback(
         times=np.arange(n_rec, dtype=np.float64) * dt,
-        q_target=q_target,
-        q_actual=q_actual,
-        joint_errors_deg=np.degrees(errors),
-        rms_error_deg=float(np.degrees(np.sqrt(np.mean(errors[:, arm] ** 2)))),
-        max_error_deg=float(np.degrees(errors[:, arm].max())),
-        rest_max_error_deg=float(np.degrees(errors[:, rest].max())) if rest else 0.0,
+        q_target=out["q_target"],
+        q_actual=out["q_actual"],
+        joint_errors_deg=out["errors"],
+        rms_error_deg=out["rms_deg"],
+        max_error_deg=out["max_deg"],
+        rest_max_error_deg=out["rest_max_deg"],
         completion_time=completion,
         movement_duration=ref.duration,
         reached_all=bool(reached.all()),
-        via_times=ref.times[ref.via_steps],
+        via_times=ref.via_steps.astype(np.float64) * dt,
         via_reach_times=reach_times.copy(),
-        frame_times=np.asarray(frame_steps, dtype=np.float64) * dt,
-        frames=frames_arr,
-        hand_path=hand_points(frames_arr, hand_index),
+        frame_times=out["frame_steps"] * dt,
+        frames=out["frames"],
+        hand_path=out["hand_path"],
         hand_reference=hand_reference,
         hand_via=hand_via,
         body_names=body_names,
@@ -340,9 +344,9 @@ def play(
 
 
 def _driven_ball_joints(
-    skel: dart.dynamics.Skeleton, ref: Reference, slices: list[slice]
+    skel: dart.dynamics.Skeleton, driven: list[str], slices: list[slice]
 ) -> list[tuple[slice, dart.dynamics.Joint]]:
-    """Ball joints whose target ever leaves rest, with their DOF slices.
+    """The ball joints the angles drive (the shoulders), with their DOF slices.
 
     The error ``θd ⊖ θ`` of every other joint is a plain difference: revolute joints
     subtract, and a ball joint aimed at rest has ``log(R(θ)ᵀ) = −θ`` exactly in DART's
@@ -352,7 +356,7 @@ def _driven_ball_joints(
     names, _ = _joint_slices(skel)
     out = []
     for name, sl in zip(names, slices, strict=True):
-        if sl.stop - sl.start == 3 and np.any(ref.positions[:, sl] != 0.0):
+        if sl.stop - sl.start == 3 and name in driven:
             out.append((sl, skel.getJoint(name)))
     return out
 
@@ -367,18 +371,48 @@ def inverse_dynamics_feedforward(
     Inverse dynamics of the *reference* (not of the measured state, so the feedforward adds
     no feedback loop), evaluated every ``stride`` grid steps and interpolated linearly in
     between; θ̈d is the finite difference of θ̇d. The skeleton's state is restored.
+    :class:`_Window` computes the same a window at a time.
     """
-    saved = (skel.getPositions(), skel.getVelocities())
     n = ref.positions.shape[0]
-    coarse = np.unique(np.append(np.arange(0, n, stride), n - 1))
-    acc = np.gradient(ref.velocities, ref.dt, axis=0) if n > 1 else np.zeros_like(ref.velocities)
+    return _feedforward(skel, ref.positions, ref.velocities, ref.dt, 0, 0, n, n, stride)
+
+
+def _feedforward(
+    skel: dart.dynamics.Skeleton,
+    q: NDArray[np.float64],
+    v: NDArray[np.float64],
+    dt: float,
+    offset: int,
+    first: int,
+    stop: int,
+    n: int,
+    stride: int = 10,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`inverse_dynamics_feedforward` at grid steps ``first`` to ``stop − 1`` of an
+    ``n``-step grid, from positions and velocities ``q``, ``v`` given at grid steps
+    ``offset`` to ``offset + len(q) − 1`` (from one step before ``first`` to one step past
+    the last coarse step needed, where the grid has them). ``first`` is a multiple of
+    ``stride``."""
+    saved = (skel.getPositions(), skel.getVelocities())
+    last = min(((stop - 1) // stride + 1) * stride, n - 1)
+    coarse = np.unique(np.append(np.arange(first, last + 1, stride), last))
     zero = np.zeros(skel.getNumDofs())
     move = np.empty((coarse.size, zero.size))
     hold = np.empty_like(move)
     for i, k in enumerate(coarse):
-        skel.setPositions(ref.positions[k])
-        skel.setVelocities(ref.velocities[k])
-        skel.setAccelerations(acc[k])
+        r = k - offset
+        # np.gradient's differences: central inside the grid, one-sided at its two ends.
+        if n < 2:
+            acc = zero
+        elif k == 0:
+            acc = (v[r + 1] - v[r]) / dt
+        elif k == n - 1:
+            acc = (v[r] - v[r - 1]) / dt
+        else:
+            acc = (v[r + 1] - v[r - 1]) / (2.0 * dt)
+        skel.setPositions(q[r])
+        skel.setVelocities(v[r])
+        skel.setAccelerations(acc)
         skel.computeInverseDynamics(False, False, False)
         move[i] = skel.getForces()
         skel.setVelocities(zero)
@@ -388,7 +422,7 @@ def inverse_dynamics_feedforward(
     skel.setPositions(saved[0])
     skel.setVelocities(saved[1])
     skel.resetCommands()
-    grid = np.arange(n)
+    grid = np.arange(first, stop)
 
     def interp(values: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.stack([np.interp(grid, coarse, values[:, j]) for j in range(values.shape[1])], 1)
@@ -396,30 +430,97 @@ def inverse_dynamics_feedforward(
     return interp(move), interp(hold)
 
 
-_Record = tuple[NDArray[np.float64], NDArray[np.int64], int, float, list]
+class _Window:
+    """The reference (positions; with ``feedforward``, the stable PD's feedforward while
+    moving, ``kd θ̇d`` plus the inverse dynamics, and while holding) on grid steps
+    ``[start, stop)``, computed :data:`WINDOW_STEPS` at a time as the set point advances."""
+
+    def __init__(
+        self,
+        skel: dart.dynamics.Skeleton,
+        ref: ReferenceStream,
+        kd: NDArray[np.float64] | None,
+        feedforward: bool,
+    ) -> None:
+        self.skel, self.ref, self.kd, self.feedforward = skel, ref, kd, feedforward
+        self.start = self.stop = 0
+        self.positions = np.empty((0, skel.getNumDofs()))
+        self.move = self.hold = self.positions
+
+    def load(self, k: int) -> None:
+        """Make the window the one holding grid step ``k``."""
+        n = self.ref.n_grid
+        start = (k // WINDOW_STEPS) * WINDOW_STEPS  # a multiple of the feedforward's stride
+        stop = min(n, start + WINDOW_STEPS)
+        if self.kd is None:  # positions only
+            self.positions, _ = self.ref.window(start, stop)
+        else:
+            last = min(((stop - 1) // 10 + 1) * 10, n - 1)
+            lo = max(0, start - 1)
+            q, v = self.ref.window(lo, min(n, last + 2))
+            self.positions = q[start - lo : start - lo + stop - start]
+            vel = v[start - lo : start - lo + stop - start]
+            if self.feedforward:
+                move, hold = _feedforward(self.skel, q, v, self.ref.dt, lo, start, stop, n)
+            else:
+                move, hold = np.zeros_like(vel), np.zeros_like(vel)
+            self.move = vel * self.kd + move
+            self.hold = hold
+        self.start, self.stop = start, stop
 
 
 class _Recorder:
-    """Joint positions and set-point indices at every step (the loops write ``q`` and ``k``
-    directly, row ``n``), and the steps of the frames, every ``stride`` steps (:meth:`frame`,
-    which also checks for divergence); :func:`play` turns the positions at those steps into
-    body transforms afterwards."""
+    """The control steps, :data:`BLOCK_STEPS` at a time: joint positions and set points as
+    the loops write them (:meth:`row`), measured and stored when a block is full
+    (:meth:`flush`: joint errors, the running RMS and maxima, the body transforms at the
+    frames, every ``stride`` steps, written by :class:`~visprim.sim.trace.TraceWriter`, so a
+    long playback goes to disk)."""
 
-    def __init__(self, skel: dart.dynamics.Skeleton, n_guess: int, stride: int, dt: float) -> None:
-        self.skel, self.stride, self.dt = skel, stride, dt
-        self.q = np.empty((n_guess + 1000, skel.getNumDofs()))
-        self.k = np.empty(n_guess + 1000, dtype=np.int64)
-        self.q[0] = skel.getPositions()
-        self.k[0] = 0
-        self.n = 1
+    def __init__(
+        self,
+        skel: dart.dynamics.Skeleton,
+        kinematics: BatchKinematics,
+        stride: int,
+        dt: float,
+        arm: list[int],
+        hand_index: int,
+    ) -> None:
+        self.skel, self.kinematics, self.stride, self.dt = skel, kinematics, stride, dt
+        self.arm = arm
+        n_dofs = skel.getNumDofs()
+        n_joints = len(_joint_slices(skel)[0])
+        self.rest = [i for i in range(n_joints) if i not in arm]
+        self.hand_index = hand_index
+        self.q = np.empty((BLOCK_STEPS, n_dofs))
+        self.target = np.empty((BLOCK_STEPS, n_dofs))
+        self.j = 0  # rows filled in the block
+        self.base = 0  # control step of the block's first row
         self.frame_steps = [0]
+        self._frames_done = 0  # frame steps already turned into body transforms
+        self.out = {
+            "q_actual": TraceWriter((n_dofs,)),
+            "q_target": TraceWriter((n_dofs,)),
+            "errors": TraceWriter((n_joints,)),
+            "frames": TraceWriter((len(kinematics.body_names), 4, 4)),
+        }
+        self.hand_path: list[NDArray[np.float64]] = []
+        self.sum_sq = 0.0
+        self.count = 0
+        self.max_arm = 0.0
+        self.max_rest = 0.0
 
-    def grow(self) -> None:
-        self.q = np.concatenate([self.q, np.empty_like(self.q)])
-        self.k = np.concatenate([self.k, np.empty_like(self.k)])
+    def row(self, q: NDArray[np.float64], target: NDArray[np.float64]) -> None:
+        """Record one control step (the positions reached and the set point followed)."""
+        if self.j == BLOCK_STEPS:
+            self.flush()
+        self.q[self.j] = q
+        self.target[self.j] = target
+        self.j += 1
 
-    def frame(self, n: int, q: NDArray[np.float64]) -> None:
+    def frame(self, n: int) -> None:
+        """Control step ``n`` is a frame; checks for divergence."""
         v = self.skel.getVelocities()
+        q = self.skel.getPositions()
         if not (np.all(np.isfinite(q)) and np.abs(v).max() < DIVERGENCE_SPEED):
             raise SimulationDiverged(
                 f"play: the simulation diverged at t = {n * self.dt:.3f} s "
@@ -427,49 +528,83 @@ class _Recorder:
             )
         self.frame_steps.append(n)
 
-    def result(self, n_rec: int, completion: float) -> _Record:
-        return self.q, self.k, n_rec, completion, self.frame_steps
+    def flush(self) -> None:
+        qa, qt = self.q[: self.j], self.target[: self.j]
+        if not np.all(np.isfinite(qa)):
+            raise SimulationDiverged("play: the simulation produced NaN joint positions")
+        errors = joint_errors(self.skel, qt, qa)
+        arm = errors[:, self.arm]
+        self.sum_sq += float(np.sum(arm * arm))
+        self.count += arm.size
+        self.max_arm = max(self.max_arm, float(arm.max()))
+        if self.rest:
+            self.max_rest = max(self.max_rest, float(errors[:, self.rest].max()))
+        self.out["q_actual"].append(qa)
+        self.out["q_target"].append(qt)
+        self.out["errors"].append(np.degrees(errors))
+        end = self.base + self.j
+        steps = np.asarray(self.frame_steps[self._frames_done :], dtype=np.int64)
+        steps = steps[steps < end]
+        if steps.size:
+            tfs = self.kinematics.transforms(qa[steps - self.base])
+            self.out["frames"].append(tfs)
+            self.hand_path.append(hand_points(tfs, self.hand_index))
+            self._frames_done += steps.size
+        self.base, self.j = end, 0
+
+    def finish(self) -> dict[str, Any]:
+        """Everything recorded (tables as arrays, or :class:`Trace` on disk when long)."""
+        n_rec = self.base + self.j
+        if self.frame_steps[-1] != n_rec - 1:
+            self.frame_steps.append(n_rec - 1)
+        self.flush()
+        out: dict[str, Any] = {k: w.finish() for k, w in self.out.items()}
+        out["n"] = n_rec
+        out["frame_steps"] = np.asarray(self.frame_steps, dtype=np.float64)
+        out["hand_path"] = np.concatenate(self.hand_path)
+        out["rms_deg"] = float(np.degrees(np.sqrt(self.sum_sq / max(1, self.count))))
+        out["max_deg"] = float(np.degrees(self.max_arm))
+        out["rest_max_deg"] = float(np.degrees(self.max_rest)) if self.rest else 0.0
+        return out
 
 
 def _run_stable(
     world: dart.simulation.World,
     skel: dart.dynamics.Skeleton,
-    ref: Reference,
+    ref: ReferenceStream,
     slices: list[slice],
     vicinity: float,
     timeout: float,
     gains: dict[str, JointGains] | None,
-    stride: int,
+    rec: _Recorder,
+    driven_joints: list[str],
     feedforward: bool = True,
-) -> tuple[_Record, tuple[NDArray[np.bool_], NDArray[np.float64]]]:
+) -> tuple[float, tuple[NDArray[np.bool_], NDArray[np.float64]]]:
     """Stable PD along the smooth trajectory with the waiting via-point sequencer."""
     dt = ref.dt
     seq = ViaPointSequencer(ref, slices, vicinity, timeout)
     servo = StablePD(skel, dt, gains)
-    positions = ref.positions
     n_wait_max = int(math.ceil(timeout / dt)) + 2
-    max_steps = ref.times.shape[0] + ref.via_steps.shape[0] * n_wait_max + 1
-    rec = _Recorder(skel, ref.times.shape[0], stride, dt)
+    max_steps = ref.n_grid + ref.via_steps.shape[0] * n_wait_max + 1
     # Feedforward on the grid: kd θ̇d (the damping's share) plus the inverse dynamics of the
     # reference while the set point moves; gravity alone while it waits on a via point.
-    if feedforward:
-        move, hold = inverse_dynamics_feedforward(skel, ref)
-    else:
-        move, hold = np.zeros_like(ref.velocities), np.zeros_like(ref.velocities)
-    ff = ref.velocities * servo.kd + move
+    win = _Window(skel, ref, servo.kd, feedforward)
+    win.load(0)
+    positions, ff, hold, w0, w1 = win.positions, win.move, win.hold, win.start, win.stop
     kp, kp_dt = servo.kp, servo.kp * dt
-    driven = _driven_ball_joints(skel, ref, slices)
+    driven = _driven_ball_joints(skel, driven_joints, slices)
     q = skel.getPositions()
+    rec.row(q, positions[0])
     completion = max_steps * dt
+    stride = rec.stride
     # The sequencer's state machine (ViaPointSequencer.check / advance) with the set point
     # index kept in a local between via points: the loop runs a thousand times a second.
     k, target_step = 0, seq.target_step
-    rec_q, rec_k, cap, n_rec = rec.q, rec.k, rec.k.shape[0], 1
     for n in range(max_steps):
         dq = skel.getVelocities()
         if k == target_step:
             seq.step = k
-            seq.check(skel.getPositionDifferences(positions[k], q), n * dt)
+            seq.check(skel.getPositionDifferences(positions[k - w0], q), n * dt)
             if seq.done:
                 completion = n * dt
                 break
@@ -477,40 +612,40 @@ def _run_stable(
         moved = k < target_step
         if moved:
             k += 1
+            if k >= w1:
+                win.load(k)
+                positions, ff, hold, w0, w1 = win.positions, win.move, win.hold, win.start, win.stop
         else:
             seq.wait += dt
-        target = positions[k]
+        i = k - w0
+        target = positions[i]
         error = target - q
         for sl, joint in driven:
             error[sl] = joint.getPositionDifferences(target[sl], q[sl])
         # Stable PD (servo.StablePD.forces, inlined): DART adds the implicit -kd θ̇(n+1).
         tau = kp * error - kp_dt * dq
-        tau += ff[k] if moved else hold[k]
+        tau += ff[i] if moved else hold[i]
         skel.setForces(tau)
         world.step()
         q = skel.getPositions()
-        if n + 1 == cap:
-            rec.grow()
-            rec_q, rec_k, cap = rec.q, rec.k, rec.k.shape[0]
-        rec_q[n + 1] = q
-        rec_k[n + 1] = k
+        rec.row(q, target)
         if (n + 1) % stride == 0:
-            rec.frame(n + 1, q)
-        n_rec = n + 2
+            rec.frame(n + 1)
     seq.step = k
-    return rec.result(n_rec, completion), (seq.reached, seq.reach_times)
+    return completion, (seq.reached, seq.reach_times)
 
 
 def _run_paper(
     world: dart.simulation.World,
     skel: dart.dynamics.Skeleton,
-    ref: Reference,
+    ref: ReferenceStream,
     slices: list[slice],
     vicinity: float,
     timeout: float,
     gains: dict[str, JointGains] | None,
-    stride: int,
-) -> tuple[_Record, tuple[NDArray[np.bool_], NDArray[np.float64]]]:
+    rec: _Recorder,
+    driven_joints: list[str],
+) -> tuple[float, tuple[NDArray[np.bool_], NDArray[np.float64]]]:
     """The paper's servo: explicit PD (eq. (1)) towards the current via point, held still
     (θ̇d = 0); the next via point is taken when every joint is within ``vicinity`` of it (or
     after ``timeout``, then it counts as missed)."""
@@ -523,13 +658,20 @@ def _run_paper(
     vicinity2 = vicinity * vicinity
     n_wait = int(math.ceil(timeout / dt))
     max_steps = len(via) * (n_wait + 2) + 1
-    rec = _Recorder(skel, ref.times.shape[0], stride, dt)
-    positions = ref.positions
-    current, waited, n_rec = 0, 0, 1
+    win = _Window(skel, ref, None, False)
+
+    def position(k: int) -> NDArray[np.float64]:
+        if not win.start <= k < win.stop:
+            win.load(k)
+        return win.positions[k - win.start]
+
+    current, waited = 0, 0
     k = via[0]
     q = skel.getPositions()
+    rec.row(q, position(0))
     completion = max_steps * dt
-    driven = _driven_ball_joints(skel, ref, slices)
+    driven = _driven_ball_joints(skel, driven_joints, slices)
+    stride = rec.stride
 
     def position_error(target: NDArray[np.float64], q: NDArray[np.float64]) -> NDArray[np.float64]:
         error = target - q
@@ -537,8 +679,9 @@ def _run_paper(
             error[sl] = joint.getPositionDifferences(target[sl], q[sl])
         return error
 
+    target = position(k)
     for n in range(max_steps):
-        error = position_error(positions[k], q)
+        error = position_error(target, q)
         while True:
             near = bool(np.add.reduceat(error * error, starts).max() <= vicinity2)
             if not near and waited < n_wait:
@@ -551,7 +694,8 @@ def _run_paper(
             if current == len(via):
                 break
             k = via[current]
-            error = position_error(positions[k], q)
+            target = position(k)
+            error = position_error(target, q)
         if current == len(via):
             completion = n * dt
             break
@@ -567,14 +711,10 @@ def _run_paper(
         world.step()
         waited += 1
         q = skel.getPositions()
-        if n + 1 == rec.k.shape[0]:
-            rec.grow()
-        rec.q[n + 1] = q
-        rec.k[n + 1] = k
+        rec.row(q, target)
         if (n + 1) % stride == 0:
-            rec.frame(n + 1, q)
-        n_rec = n + 2
-    return rec.result(n_rec, completion), (reached, reach_times)
+            rec.frame(n + 1)
+    return completion, (reached, reach_times)
 
 
 def _shapes_by_name() -> dict[str, tuple[ShapeSpec, ...]]:

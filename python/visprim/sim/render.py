@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from PIL import Image, ImageDraw, ImageFont
 
 from visprim.sim.playback import Playback
+from visprim.sim.trace import blocks
 
 #: Supersampling factor: frames are drawn this many times larger, then reduced.
 SUPERSAMPLE = 2
@@ -316,65 +317,132 @@ class PlaybackDrawer:
         if self.footer:
             self.labels.append(_Label(self.footer, TEXT_PX, "md", (w / 2, h), True, width=w))
         # Bodies that never move (the pelvis and legs) are projected once.
-        frames = playback.frames
-        still = np.abs(frames - frames[:1]).max(axis=(0, 2, 3)) < 1e-12
+        frames = playback.frames  # an array, or a Trace on disk: read a block at a time
+        first = np.asarray(frames[0])
+        moved = np.zeros(first.shape[0])
+        for _, block in blocks(frames):
+            moved = np.maximum(moved, np.abs(block - first).max(axis=(0, 2, 3)))
+        still = moved < 1e-12
         self.moving = np.flatnonzero(~still)
         self.static_items = p.body_items(
-            frames[0][still], [s for s, k in zip(playback.body_shapes, still, strict=True) if k]
+            first[still], [s for s, k in zip(playback.body_shapes, still, strict=True) if k]
         )
         self.moving_shapes = [playback.body_shapes[i] for i in self.moving]
-        # Over the bodies: the target path and via points (redrawn only when a via point is
-        # reached), then the path taken so far (drawn a segment at a time). Both are kept as
-        # transparent layers, so a frame costs the same at the end of a long playback as at
-        # its start.
+        # Over the bodies: the target path and via points, then the path taken so far. Both
+        # are transparent layers drawn incrementally as time goes forward (a via point's dot
+        # is drawn open at the start and filled over when it is reached; the path a segment at
+        # a time), and only the part of a layer that holds drawing is composited, so a frame
+        # costs the same at the end of a long playback as at its start.
         self._marks: Image.Image | None = None
         self._reached: NDArray[np.bool_] | None = None
         self._path: Image.Image | None = None
         self._path_end = 0
+        self._path_box: tuple[int, int, int, int] | None = None
+        self._marks_box = _box(np.concatenate([self.ref_2d, self.via_2d]), 4.0 * SUPERSAMPLE)
 
     def _layer(self) -> Image.Image:
         w, h = self.painter.size
         return Image.new("RGBA", (w * SUPERSAMPLE, h * SUPERSAMPLE), (0, 0, 0, 0))
 
-    def _overlays(self, index: int, t: float) -> tuple[Image.Image, Image.Image]:
+    def _dot(self, draw: ImageDraw.ImageDraw, j: int, hit: bool) -> None:
+        s = SUPERSAMPLE
+        r = 2.2 * s
+        x, y = self.via_2d[j]
+        draw.ellipse(
+            (x - r, y - r, x + r, y + r),
+            fill=(26, 166, 51) if hit else (255, 255, 255),
+            outline=(26, 115, 38),
+            width=max(1, s),
+        )
+
+    def _overlays(self, index: int, t: float) -> list[tuple[Image.Image, Any]]:
+        """The overlay layers at frame ``index`` (time ``t`` s), each with the box that holds
+        its drawing (None: nothing drawn yet)."""
         pb, p, s = self.playback, self.painter, SUPERSAMPLE
         reached = np.nan_to_num(pb.via_reach_times, nan=np.inf) <= t + 1e-9
-        if self._marks is None or self._reached is None or np.any(reached != self._reached):
-            self._marks, self._reached = self._layer(), reached
+        if self._marks is None or self._reached is None or np.any(self._reached & ~reached):
+            # From the start (or back in time): the path, every dot open, the reached filled.
+            self._marks, self._reached = self._layer(), np.zeros_like(reached)
             draw = ImageDraw.Draw(self._marks)
             for run in self.ref_runs:
                 draw.line(run, fill=(51, 89, 217), width=max(1, int(1.2 * s)))
-            r = 2.2 * s
-            for (x, y), hit in zip(self.via_2d, reached, strict=True):
-                draw.ellipse(
-                    (x - r, y - r, x + r, y + r),
-                    fill=(26, 166, 51) if hit else (255, 255, 255),
-                    outline=(26, 115, 38),
-                    width=max(1, s),
-                )
+            for j in range(self.via_2d.shape[0]):
+                self._dot(draw, j, False)
+        if np.any(reached & ~self._reached):
+            draw = ImageDraw.Draw(self._marks)
+            for hit in np.flatnonzero(reached & ~self._reached).tolist():
+                self._dot(draw, hit, True)
+            self._reached = reached
         if self._path is None or index < self._path_end:
-            self._path, self._path_end = self._layer(), 0
+            self._path, self._path_end, self._path_box = self._layer(), 0, None
         if index > self._path_end:
             piece = self.path_2d[self._path_end : index + 1]
             p.polyline(ImageDraw.Draw(self._path), piece, (230, 102, 13), 1.6 * s)
+            self._path_box = _union(self._path_box, _box(piece, 2.0 * s))
             self._path_end = index
-        return self._marks, self._path
+        return [(self._marks, self._marks_box), (self._path, self._path_box)]
 
-    def draw(self, index: int, clock: float | None = None) -> Image.Image:
-        """Frame ``index`` as an RGB image; ``clock`` (s) overrides the time shown."""
+    def draw(
+        self,
+        index: int,
+        clock: float | None = None,
+        *,
+        transforms: NDArray[np.float64] | None = None,
+        time: float | None = None,
+    ) -> Image.Image:
+        """Frame ``index`` as an RGB image; ``clock`` (s) overrides the time shown.
+
+        ``transforms`` (n_bodies, 4, 4) draws the bodies there instead of at the stored
+        frame (a pose between frames), and ``time`` (s, simulation) decides which via
+        points are shown reached; the path taken is drawn up to frame ``index``."""
         pb, p = self.playback, self.painter
         image, draw = p.canvas()
-        items = p.body_items(pb.frames[index][self.moving], self.moving_shapes)
+        tfs = pb.frames[index] if transforms is None else transforms
+        items = p.body_items(tfs[self.moving], self.moving_shapes)
         p.draw_items(draw, items + self.static_items)
-        t = pb.frame_times[index]
-        for layer in self._overlays(index % pb.frames.shape[0], float(t)):
-            image.paste(layer, (0, 0), layer)
+        t = pb.frame_times[index] if time is None else time
+        for layer, box in self._overlays(index % pb.frames.shape[0], float(t)):
+            paste_layer(image, layer, box)
         out = p.finish(image)
         for label in self.labels:
             label.paste(out)
         clock_text = f"t = {t if clock is None else clock:.2f} s"
         p.text(out, (p.size[0] - 4, 4), clock_text, TEXT_PX, "ra")
         return out
+
+
+def _box(points: NDArray[np.float64], margin: float) -> tuple[int, int, int, int] | None:
+    """The integer pixel box (left, top, right, bottom) around ``points`` (n, 2), widened by
+    ``margin`` pixels; None for no points."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    pts = pts[np.isfinite(pts).all(axis=1)]
+    if pts.shape[0] == 0:
+        return None
+    lo = np.floor(pts.min(axis=0) - margin).astype(int)
+    hi = np.ceil(pts.max(axis=0) + margin).astype(int) + 1
+    return (int(lo[0]), int(lo[1]), int(hi[0]), int(hi[1]))
+
+
+def _union(
+    a: tuple[int, int, int, int] | None, b: tuple[int, int, int, int] | None
+) -> tuple[int, int, int, int] | None:
+    if a is None or b is None:
+        return a if b is None else b
+    return (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3]))
+
+
+def paste_layer(image: Image.Image, layer: Image.Image, box: Any) -> None:
+    """Composite the RGBA ``layer`` (the size of ``image``) over ``image`` within ``box``
+    (left, top, right, bottom pixels; None: nothing to composite): the same pixels as the
+    whole layer pasted, at the cost of the box."""
+    if box is None:
+        return
+    w, h = image.size
+    box = (max(0, box[0]), max(0, box[1]), min(w, box[2]), min(h, box[3]))
+    if box[0] >= box[2] or box[1] >= box[3]:
+        return
+    part = layer.crop(box)
+    image.paste(part, box[:2], part)
 
 
 def _check_size(size: tuple[int, int]) -> tuple[int, int]:

@@ -185,6 +185,72 @@ class Reference:
     duration: float
 
 
+class ReferenceStream:
+    """The target trajectory of :func:`build_reference`, computed a window of grid steps at a
+    time (:meth:`window`) instead of all at once: the same values, in memory bounded by the
+    window whatever the length. Attributes as :class:`Reference` (``via_steps``, ``dt``,
+    ``duration``), ``n_grid`` = K + 1 grid points."""
+
+    def __init__(
+        self,
+        skeleton: dart.dynamics.Skeleton,
+        times: ArrayLike,
+        angles: ArrayLike,
+        dt: float,
+        via_spacing: float = 0.1,
+    ) -> None:
+        t, a = validate_trajectory(times, angles)
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a positive number of seconds, got {dt}")
+        if not (np.isfinite(via_spacing) and via_spacing >= dt):
+            raise ValueError(
+                f"via_spacing must be at least the time step {dt} s, got {via_spacing} s"
+            )
+        self.skeleton = skeleton
+        self.dt = float(dt)
+        self.duration = float(t[-1] - t[0])
+        n_steps = max(1, int(round(self.duration / dt)))
+        self.n_grid = n_steps + 1
+        self.n_arms = a.shape[1] // 4
+        self._spline = CubicSpline(t - t[0], a, axis=0)
+        stride = max(1, int(round(via_spacing / dt)))
+        via = np.arange(stride, n_steps, stride, dtype=np.int64)
+        if via.size and n_steps - via[-1] < stride // 2:
+            via = via[:-1]  # avoid a via point crowding the end point
+        self.via_steps = np.append(via, np.int64(n_steps))
+
+    def _grid(self, steps: NDArray[np.int64]) -> NDArray[np.float64]:
+        return np.minimum(steps * self.dt, self.duration)
+
+    def positions_at(self, steps: ArrayLike) -> NDArray[np.float64]:
+        """Joint positions (k, n_dofs) at grid indices ``steps``."""
+        grid = self._grid(np.asarray(steps, dtype=np.int64))
+        return angles_to_positions(self.skeleton, self._spline(grid))
+
+    def window(self, start: int, stop: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Joint positions and velocities (each (stop − start, n_dofs)) at grid indices
+        ``start`` to ``stop − 1`` (clipped to the grid)."""
+        steps = np.arange(max(0, start), min(self.n_grid, stop), dtype=np.int64)
+        grid = self._grid(steps)
+        a_grid = self._spline(grid)
+        q = angles_to_positions(self.skeleton, a_grid)
+        v = np.zeros_like(q)
+        rates = self._spline(grid, 1)
+        for (side, arm), (_, rate) in zip(_arms(a_grid), _arms(rates), strict=True):
+            sh, el = arm_dof_indices(self.skeleton, side)
+            omega = shoulder_angular_velocity(arm, rate)
+            # A reflection turns an angular velocity (a pseudo-vector) w into -P w.
+            v[:, sh] = -omega @ MIRROR if side == "left" else omega
+            v[:, el] = rate[:, 3]
+        return q, v
+
+    def reference(self) -> Reference:
+        """The whole :class:`Reference` (every grid step in memory)."""
+        q, v = self.window(0, self.n_grid)
+        times = np.arange(self.n_grid, dtype=np.float64) * self.dt
+        return Reference(self.dt, times, q, v, self.via_steps, self.duration)
+
+
 def build_reference(
     skeleton: dart.dynamics.Skeleton,
     times: ArrayLike,
@@ -197,31 +263,7 @@ def build_reference(
 
     Via points every ``via_spacing`` seconds (at least one: the end point).
     """
-    t, a = validate_trajectory(times, angles)
-    if not (np.isfinite(dt) and dt > 0):
-        raise ValueError(f"dt must be a positive number of seconds, got {dt}")
-    if not (np.isfinite(via_spacing) and via_spacing >= dt):
-        raise ValueError(f"via_spacing must be at least the time step {dt} s, got {via_spacing} s")
-    duration = float(t[-1] - t[0])
-    n_steps = max(1, int(round(duration / dt)))
-    grid = np.minimum(np.arange(n_steps + 1) * dt, duration)
-    spline = CubicSpline(t - t[0], a, axis=0)
-    a_grid = spline(grid)
-    q = angles_to_positions(skeleton, a_grid)
-    v = np.zeros_like(q)
-    rates = spline(grid, 1)
-    for (side, arm), (_, rate) in zip(_arms(a_grid), _arms(rates), strict=True):
-        sh, el = arm_dof_indices(skeleton, side)
-        omega = shoulder_angular_velocity(arm, rate)
-        # A reflection turns an angular velocity (a pseudo-vector) w into -P w.
-        v[:, sh] = -omega @ MIRROR if side == "left" else omega
-        v[:, el] = rate[:, 3]
-    stride = max(1, int(round(via_spacing / dt)))
-    via = np.arange(stride, n_steps, stride, dtype=np.int64)
-    if via.size and n_steps - via[-1] < stride // 2:
-        via = via[:-1]  # avoid a via point crowding the end point
-    via = np.append(via, np.int64(n_steps))
-    return Reference(dt, np.arange(n_steps + 1, dtype=np.float64) * dt, q, v, via, duration)
+    return ReferenceStream(skeleton, times, angles, dt, via_spacing).reference()
 
 
 @dataclass
@@ -237,7 +279,7 @@ class ViaPointSequencer:
     ``reached`` / ``reach_times`` (s, NaN if missed) per via point.
     """
 
-    reference: Reference
+    reference: Reference | ReferenceStream
     joint_slices: list[slice]
     vicinity: float
     timeout: float

@@ -61,6 +61,30 @@ def _rest_transforms(n_arms: int) -> tuple[NDArray[np.float64], list[Any]]:
     return np.stack(tfs), shapes
 
 
+def adonis_drawer(imitation: Any, size: tuple[int, int], camera: Camera) -> PlaybackDrawer:
+    """The drawer of the Adonis panel of an imitation: title (what the rebuild is made of)
+    and a footer with the headline figures."""
+    pb = imitation.playback
+    m = imitation.metrics
+    adonis = m["adonis"]
+    seq = " ".join(str(int(k)) for k in imitation.primitives)
+    if len(seq) > 40:
+        seq = seq[:37] + "..."
+    what = "primitives" if imitation.source == "primitives" else "NEAR-COPY (projection)"
+    return PlaybackDrawer(
+        pb,
+        camera,
+        size,
+        title=f"Adonis: {what} {seq if imitation.source == 'primitives' else ''}".strip(),
+        footer=(
+            f"Adonis vs human, bone directions: {adonis['vs_human_direction_rms_deg']:.1f}° "
+            f"RMS\nholding still instead: {m['headline']['still_posture_rms_deg']:.1f}°\n"
+            f"tracks its rebuild to {adonis['vs_rebuild_joint_rms_deg']['overall']:.1f}° · "
+            f"time {adonis['time_ratio']:.2f}x · via {pb.n_reached}/{pb.n_via}"
+        ),
+    )
+
+
 class SideBySide:
     """Draws the frames of an :class:`visprim.imitate.Imitation` (see the module docstring)."""
 
@@ -79,23 +103,7 @@ class SideBySide:
         self.fps = float(imitation.playback.render_fps)
         pb = imitation.playback
         m = imitation.metrics
-        adonis = m["adonis"]
-        seq = " ".join(str(int(k)) for k in imitation.primitives)
-        if len(seq) > 40:
-            seq = seq[:37] + "..."
-        what = "primitives" if imitation.source == "primitives" else "NEAR-COPY (projection)"
-        self.adonis = PlaybackDrawer(
-            pb,
-            cam,
-            size,
-            title=f"Adonis: {what} {seq if imitation.source == 'primitives' else ''}".strip(),
-            footer=(
-                f"Adonis vs human, bone directions: {adonis['vs_human_direction_rms_deg']:.1f}° "
-                f"RMS\nholding still instead: {m['headline']['still_posture_rms_deg']:.1f}°\n"
-                f"tracks its rebuild to {adonis['vs_rebuild_joint_rms_deg']['overall']:.1f}° · "
-                f"time {adonis['time_ratio']:.2f}x · via {pb.n_reached}/{pb.n_via}"
-            ),
-        )
+        self.adonis = adonis_drawer(imitation, size, cam)
         self.painter = Painter(cam, size)
         p = self.painter
         # Background of the human panel: Adonis at rest without the recorded arm(s), faint.
@@ -195,6 +203,13 @@ def render_imitation(
     camera: Camera | None = None,
 ) -> Path:
     """Write the side-by-side video of an imitation (.gif or .mp4, from the extension),
-    atomically, at the playback's frame rate. Returns the path."""
+    atomically, one frame at a time. A recording read from a video shows its own frames with
+    the detected arm, on the video's clock (:mod:`visprim.sim.sidebyside_video`); any other
+    shows the recorded arm as a stick figure at the playback's frame rate. Returns the
+    path."""
+    from visprim.sim.sidebyside_video import is_video_trial, render_video_imitation
+
+    if is_video_trial(imitation.trial):
+        return render_video_imitation(imitation, path, size=size, camera=camera)
     view = SideBySide(imitation, size, camera)
     return write_video(path, view.frames(), view.fps)

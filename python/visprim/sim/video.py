@@ -8,18 +8,24 @@
   (the optional extra ``pip install visprim[video]``); yuv420p, so width and height are
   rounded up to even numbers by padding.
 
-Any other extension is refused with a message naming the supported ones. The file is written
-under a temporary name in the target's folder and renamed over the target at the end
-(:func:`os.replace`), so a failure never leaves a half-written video.
+Frames are drawn in a second thread while the first encodes (:func:`prefetched`, a queue
+of :data:`PREFETCH` frames), so drawing and encoding share the machine's cores and memory
+still holds a few frames. Any other extension is refused with a message naming the
+supported ones. The file is written under a temporary name in the target's folder and
+renamed over the target at the end (:func:`os.replace`), so a failure never leaves a
+half-written video.
 """
 
 from __future__ import annotations
 
 import io
 import itertools
+import queue
 import struct
-from collections.abc import Iterable
+import threading
+from collections.abc import Iterable, Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from PIL import Image
@@ -49,6 +55,20 @@ def check_video_path(path: str | Path) -> Path:
                 "(or write a .gif)"
             ) from None
     return out
+
+
+def default_video_name(stem: str) -> tuple[str, str | None]:
+    """``stem.mp4`` when imageio-ffmpeg is installed, else ``stem.gif`` with the reason (one
+    line to show the user)."""
+    try:
+        import imageio_ffmpeg  # noqa: F401
+    except ImportError:
+        return (
+            f"{stem}.gif",
+            f"imageio-ffmpeg is not installed (pip install 'visprim[video]'): writing "
+            f"{stem}.gif instead of {stem}.mp4",
+        )
+    return f"{stem}.mp4", None
 
 
 def _frame_blocks(im: Image.Image) -> bytes:
@@ -140,6 +160,50 @@ def _mp4(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
     return n
 
 
+#: Frames drawn ahead of the encoder.
+PREFETCH = 4
+
+
+def prefetched(frames: Iterable[Image.Image], depth: int = PREFETCH) -> Iterator[Image.Image]:
+    """``frames``, produced by a background thread up to ``depth`` ahead (memory: ``depth``
+    frames). An exception in the producer is raised here; leaving the loop early (or an
+    interrupt) stops the producer."""
+    q: queue.Queue[tuple[str, Any]] = queue.Queue(maxsize=max(1, depth))
+    stop = threading.Event()
+
+    def put(item: tuple[str, Any]) -> bool:
+        while not stop.is_set():
+            try:
+                q.put(item, timeout=0.1)
+                return True
+            except queue.Full:
+                continue
+        return False
+
+    def produce() -> None:
+        try:
+            for frame in frames:
+                if not put(("frame", frame)):
+                    return
+            put(("end", None))
+        except BaseException as exc:  # handed to the consumer
+            put(("error", exc))
+
+    worker = threading.Thread(target=produce, name="visprim-frames", daemon=True)
+    worker.start()
+    try:
+        while True:
+            kind, value = q.get()
+            if kind == "end":
+                return
+            if kind == "error":
+                raise value
+            yield value
+    finally:
+        stop.set()
+        worker.join()
+
+
 def write_video(path: str | Path, frames: Iterable[Image.Image], fps: float) -> Path:
     """Write ``frames`` (RGB images of one size) at ``fps`` Hz to ``path`` (.gif or .mp4),
     atomically. Returns the path. Parent folders are created."""
@@ -148,7 +212,7 @@ def write_video(path: str | Path, frames: Iterable[Image.Image], fps: float) -> 
         raise ValueError(f"fps must be > 0 Hz, got {fps}")
     with atomic_file(out) as tmp:
         if out.suffix.lower() == ".gif":
-            _gif(tmp, frames, float(fps))
+            _gif(tmp, prefetched(frames), float(fps))
         else:
-            _mp4(tmp, frames, float(fps))
+            _mp4(tmp, prefetched(frames), float(fps))
     return out
