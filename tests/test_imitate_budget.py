@@ -85,3 +85,73 @@ def test_two_arms_share_the_budget(data) -> None:
     assert _err(shared) < _err(plain)
     with pytest.raises(ValueError, match="below the smallest description"):
         imitate(model, both, play=False, budget=0.9 * d["numbers_per_s"])
+
+
+def test_a_budget_uses_the_rate_benchmark_settings(data) -> None:
+    """With a budget: the RATE_OPTIONS defaults (unit posture, strokes cut), counted and
+    stated; without: the model's own storage."""
+    from visprim.params import RATE_OPTIONS
+
+    model, trial = data
+    plain = imitate(model, trial, play=False)
+    d0 = plain.metrics["description"]
+    assert d0["posture"] == "mean" and d0["max_stroke_s"] is None
+    result = imitate(model, trial, play=False, budget=1e4)
+    d = result.metrics["description"]
+    assert d["posture"] == RATE_OPTIONS["posture"].default
+    assert d["max_stroke_s"] == RATE_OPTIONS["max_stroke"].default
+    assert "strokes cut at" in result.summary() and "uncut" in plain.summary()
+    # No stroke longer than max_stroke, and the cuts tile the uncut segments.
+    durations = result.segments[:, 1] - result.segments[:, 0]
+    assert durations.max() <= d["max_stroke_s"] + 1e-9
+    assert result.segments[0, 0] == pytest.approx(plain.segments[0, 0])
+    assert result.segments[-1, 1] == pytest.approx(plain.segments[-1, 1])
+    assert durations.sum() == pytest.approx(np.sum(plain.segments[:, 1] - plain.segments[:, 0]))
+    # The cheapest description under these settings: start time, and per (cut) segment the
+    # id, the duration and 4 posture numbers (two unit bone directions).
+    n = result.metrics["n_segments"]
+    assert n > plain.metrics["n_segments"]
+    least = (1 + 6 * n) / d["seconds"]
+    cheapest = imitate(model, trial, play=False, budget=least + 1e-9)
+    c = cheapest.metrics["description"]
+    assert c["numbers"] == 1 + 6 * n and c["description"] == "nearest primitive"
+    assert c["numbers_per_s"] <= least + 1e-9
+    with pytest.raises(ValueError, match="below the smallest description"):
+        imitate(model, trial, play=False, budget=0.99 * least)
+    # The model's own storage within a budget, when asked for.
+    old = imitate(model, trial, play=False, budget=1e4, budget_options={"max_stroke": None})
+    assert old.metrics["n_segments"] == plain.metrics["n_segments"]
+    with pytest.raises(ValueError, match="only with a budget"):
+        imitate(model, trial, play=False, budget_options={"posture": "unit"})
+
+
+def test_unit_posture_keeps_the_mean_bone_directions(data) -> None:
+    """A segment rebuilt with the unit posture points each bone, on average, where the
+    segment's mean bone direction points."""
+    from visprim.rate.budget import (
+        budget_settings,
+        cut_vectors,
+        describe_segments,
+        rebuilt_postures,
+    )
+    from visprim.vectors import to_curves
+
+    model, trial = data
+    settings = budget_settings()
+    sv = cut_vectors(model, model.prepare([trial]), settings.max_stroke)
+    seconds = float(sv.ends.max() - sv.starts.min())
+    rebuilt, d = describe_segments(
+        model, sv.vectors, seconds, budget=1e4, settings=settings, postures=sv.offsets
+    )
+    assert d.settings.posture == "unit"
+    curves = (
+        to_curves(rebuilt, model.n_channels)
+        + rebuilt_postures(model, d.settings, sv.offsets, rebuilt)[:, None, :]
+    )
+    mean = curves.mean(axis=1).reshape(len(curves), -1, 3)
+    own = sv.offsets.reshape(len(curves), -1, 3)
+    unit = lambda v: v / np.linalg.norm(v, axis=-1, keepdims=True)  # noqa: E731
+    assert np.allclose(unit(mean), unit(own), atol=1e-9)
+    # Each bone's mean squared length is one, as for the unit bones of a movement.
+    length2 = np.sum(curves.reshape(len(curves), curves.shape[1], -1, 3) ** 2, axis=3)
+    assert np.allclose(length2.mean(axis=1), 1.0, atol=1e-9)

@@ -288,10 +288,15 @@ def _size_line(d: dict[str, Any] | None) -> str:
     if not d:
         return "  description: -"
     budget = d.get("budget_numbers_per_s")
+    cut = d.get("max_stroke_s")
+    settings = f"; posture as {d.get('posture_numbers_per_segment', '-')}; strokes " + (
+        "uncut" if cut is None else f"cut at {cut:g} s"
+    )
     return (
         f"  description: {d['description']}, {d['numbers']} numbers in {d['seconds']:.2f} s = "
         f"{d['numbers_per_s']:.1f} numbers/s"
         + ("" if budget is None else f" (budget {budget:g} numbers/s)")
+        + settings
     )
 
 
@@ -474,32 +479,65 @@ class _Segmented:
     description: Any = None
 
 
-def _described(model: Any, sv: Any, source: Source, budget: float | None) -> tuple[Any, Any]:
+def _described(
+    model: Any, sv: Any, source: Source, budget: float | None, settings: Any
+) -> tuple[Any, Any]:
     """The segments rebuilt through the model's primitives (scaled by each segment's
     amplitude if the model says so; with ``budget``, the best description within that many
-    numbers per second, :func:`visprim.rate.describe_segments`) or their projections, and
-    the description used."""
-    from visprim.rate import describe_segments
+    numbers per second, :func:`visprim.rate.describe_segments`, stored with ``settings``,
+    :class:`visprim.rate.budget.Settings`) or their projections, as curves on the trial's
+    own channels, and the description used."""
+    from visprim.rate.budget import describe_segments, rebuilt_postures
 
     seconds = float(np.max(sv.ends) - np.min(sv.starts))
     family = "projection" if source == "projection" else None
-    return describe_segments(model, sv.vectors, seconds, family=family, budget=budget)
+    rebuilt, d = describe_segments(
+        model,
+        sv.vectors,
+        seconds,
+        family=family,
+        budget=budget,
+        settings=settings,
+        postures=sv.offsets,
+    )
+    if d.settings.posture == "mean":
+        return sv.to_trial_angles(rebuilt), d
+    from visprim.vectors import to_curves
+
+    post = rebuilt_postures(model, d.settings, sv.offsets, rebuilt)
+    return to_curves(rebuilt, int(model.n_channels)) + post[:, None, :], d
 
 
-def _shares(model: Any, pieces: Sequence[Trial], budget: float | None) -> list[float | None]:
+def _settings(budget: float | None, override: dict[str, Any]) -> Any:
+    """How the segments are stored: with a budget, the defaults of
+    :data:`visprim.params.RATE_OPTIONS` (:func:`visprim.rate.budget.budget_settings`) with
+    ``override``; without, the model's own (each channel's mean posture, strokes uncut)."""
+    from visprim.rate.budget import Settings, budget_settings
+
+    if budget is None:
+        if override:
+            raise ValueError(f"{', '.join(sorted(override))}: only with a budget")
+        return Settings()
+    return budget_settings(**override)
+
+
+def _shares(
+    model: Any, pieces: Sequence[Trial], budget: float | None, settings: Any
+) -> list[float | None]:
     """Each piece's share of the ``budget`` (numbers per second of its own movement): the
     budget itself for one piece, else the shares of the best combination of descriptions
     (:func:`visprim.rate.share_budget`)."""
     if budget is None or len(pieces) == 1:
         return [budget] * len(pieces)
-    from visprim.rate import share_budget
+    from visprim.rate.budget import cut_vectors, share_budget
 
-    parts = []
+    parts, postures = [], []
     for t in pieces:
-        sv = model.vectorize(model.prepare([t]))
+        sv = cut_vectors(model, model.prepare([t]), settings.max_stroke)
         parts.append((sv.vectors, float(np.max(sv.ends) - np.min(sv.starts))))
+        postures.append(sv.offsets)
     span = max(sec for _, sec in parts)
-    return list(share_budget(model, parts, span, float(budget)))
+    return list(share_budget(model, parts, span, float(budget), settings, postures))
 
 
 def _description_metrics(parts: Sequence[_Segmented], budget: float | None) -> dict[str, Any]:
@@ -513,14 +551,32 @@ def _description_metrics(parts: Sequence[_Segmented], budget: float | None) -> d
         "seconds": seconds,
         "numbers_per_s": numbers / seconds if seconds > 0 else float("inf"),
         "description": "; ".join(dict.fromkeys(d.label for d in descs)),
+        "posture": descs[0].settings.posture,
+        "posture_numbers_per_segment": _posture_count(descs[0]),
+        "max_stroke_s": descs[0].settings.max_stroke,
+        "counted": "per movement its start time; per segment the primitive id (none for "
+        "the projection), the duration, the posture and the description's coefficients",
     }
     if len(descs) > 1:
         out["arms"] = {side: d.to_dict() for side, d in zip(ARM_SIDES, descs, strict=False)}
     return out
 
 
+def _posture_count(d: Any) -> str:
+    return (
+        "2 unit bone directions (4 numbers per arm)"
+        if d.settings.posture == "unit"
+        else "each channel's mean"
+    )
+
+
 def _segment_and_rebuild(
-    model: Any, trial: Trial, source: Source, name: str, budget: float | None = None
+    model: Any,
+    trial: Trial,
+    source: Source,
+    name: str,
+    budget: float | None = None,
+    settings: Any = None,
 ) -> _Segmented:
     corpus = model.prepare([trial])
     seg = corpus.segmentation
@@ -529,12 +585,16 @@ def _segment_and_rebuild(
             f"{trial.source or name}: no segment found (the arm never moves significantly for "
             f"{seg.method.upper()}); nothing to imitate"
         )
-    sv = model.vectorize(corpus)
+    if settings is None:
+        settings = _settings(budget, {})
+    # Strokes longer than the settings' max_stroke cut into equal parts.
+    from visprim.rate.budget import cut_vectors
+
+    sv = cut_vectors(model, corpus, settings.max_stroke)
     projections = model.transform(sv.vectors)
     labels, distances = model.assign(projections)
-    rebuilt, description = _described(model, sv, source, budget)
     # Curves in the model's description (angles or bone directions), on the trial's turns.
-    curves = sv.to_trial_angles(rebuilt)
+    curves, description = _described(model, sv, source, budget, settings)
     bounds = np.stack([sv.starts, sv.ends], axis=1)
     rebuild = Rebuild(
         JoinedTrajectory(list(curves), bounds), str(getattr(model, "features", "zyz"))
@@ -594,6 +654,7 @@ def imitate(
     render_fps: float = 25.0,
     play: bool = True,
     budget: float | None = None,
+    budget_options: dict[str, Any] | None = None,
 ) -> Imitation:
     """Imitate one recording with a fitted model (see the module docstring).
 
@@ -617,7 +678,13 @@ def imitate(
         projection; :func:`visprim.rate.describe_segments`); arms imitated one by one share
         it as the best combination of their descriptions (:func:`visprim.rate.share_budget`).
         ``metrics["description"]`` states the size of the description used, with or without
-        a budget.
+        a budget. With a budget the segments are stored as the rate benchmark chose
+        (:data:`visprim.params.RATE_OPTIONS`: each segment's posture as the unit bone
+        directions of its mean, 4 numbers per arm, and strokes longer than 0.8 s cut into
+        equal parts; :func:`visprim.rate.budget.budget_settings`); without, as the model
+        does (6 posture numbers per arm, strokes uncut).
+    budget_options : with ``budget``, settings in place of those defaults (``posture``:
+        "mean" or "unit"; ``max_stroke``: seconds or None).
 
     Raises
     ------
@@ -643,9 +710,11 @@ def imitate(
     if budget is not None and source != "primitives":
         raise ValueError("budget picks the description through the primitives: leave source")
     pieces = split_arms(trial) if per_arm else [trial]
-    shares = _shares(model, pieces, budget)
+    settings = _settings(budget, dict(budget_options or {})).for_model(model)
+    shares = _shares(model, pieces, budget, settings)
     parts = [
-        _segment_and_rebuild(model, t, source, name, b) for t, b in zip(pieces, shares, strict=True)
+        _segment_and_rebuild(model, t, source, name, b, settings)
+        for t, b in zip(pieces, shares, strict=True)
     ]
     times = parts[0].times
     human = np.concatenate([p.human for p in parts], axis=1)

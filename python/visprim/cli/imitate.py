@@ -10,6 +10,16 @@ from typing import Any
 from visprim.cli import common, outputs
 
 
+def _budget_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The budget settings given on the command line (the others: RATE_OPTIONS defaults)."""
+    out: dict[str, Any] = {}
+    if getattr(args, "budget_posture", None) is not None:
+        out["posture"] = args.budget_posture
+    if hasattr(args, "budget_max_stroke"):
+        out["max_stroke"] = args.budget_max_stroke
+    return out
+
+
 def read_recording(args: argparse.Namespace, path: str, model: Any) -> Any:
     """Read the recording ``path`` with the reader options of ``args``: both arms for a
     two-arm model (whatever ``--arm`` says), else the arm asked for (``--arm both`` with a
@@ -91,6 +101,8 @@ def run(args: argparse.Namespace) -> int:
                 f"--video {video}: writing .mp4 needs imageio-ffmpeg: pip install "
                 "'visprim[video]' (or name it .gif)"
             ) from None
+    if args.budget is None and _budget_options(args):
+        raise common.UsageError("--budget-posture and --budget-max-stroke need --budget")
     if args.budget is not None and (args.source != "primitives" or not args.budget > 0):
         raise common.UsageError(
             "--budget needs a positive number of numbers per second, and the default --source"
@@ -105,7 +117,13 @@ def run(args: argparse.Namespace) -> int:
         trial = read_recording(args, args.recording, model)
         progress.step(f"segmenting, rebuilding, playing {trial.duration:.1f} s on Adonis")
         result = imitate(
-            model, trial, source=args.source, servo=args.servo, dt=args.dt, budget=args.budget
+            model,
+            trial,
+            source=args.source,
+            servo=args.servo,
+            dt=args.dt,
+            budget=args.budget,
+            budget_options=_budget_options(args),
         )
         progress.step("writing files" + (" and the video" if video else ""))
         with outputs.atomic_folder(out, "imitate") as tmp:
@@ -154,6 +172,24 @@ def register(sub: Any) -> None:
         help="rebuild through the best description within N numbers per second of movement "
         "(nearest primitive, with its gain, with residual coefficients, or each segment's "
         "projection); imitation.json says which one was used",
+    )
+    from visprim.cli.evaluate import _stroke
+    from visprim.params import RATE_OPTIONS
+
+    rate = RATE_OPTIONS
+    p.add_argument(
+        "--budget-posture",
+        choices=rate["posture"].searched,
+        default=None,
+        help=f"with --budget: {rate['posture'].help} (default {rate['posture'].default})",
+    )
+    p.add_argument(
+        "--budget-max-stroke",
+        type=_stroke,
+        default=argparse.SUPPRESS,
+        metavar="S",
+        help=f"with --budget: {rate['max_stroke'].help}; 'none' or seconds (default "
+        f"{rate['max_stroke'].default})",
     )
     p.add_argument(
         "--servo",

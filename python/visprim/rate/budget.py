@@ -10,10 +10,109 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from visprim.rate.descriptions import dct_residual, movement_numbers
+from visprim.rate.descriptions import (
+    POSTURES,
+    dct_residual,
+    movement_numbers,
+    unit_bones,
+    unit_posture,
+)
 
 #: Most DCT coefficients per channel of the residual among the candidates.
 DCT_Q_MAX = 6
+
+# ---------------------------------------------------------------------------- settings
+
+
+@dataclass(frozen=True)
+class Settings:
+    """How a movement's segments are stored within a budget: each segment's ``posture``
+    (:data:`~visprim.rate.descriptions.POSTURES`: its channel means, or the unit bone
+    directions of that mean) and the longest stroke, ``max_stroke`` seconds (longer
+    segments are cut into equal parts, :func:`~visprim.rate.split_long`; None: never).
+    :func:`budget_settings` gives the defaults of :data:`visprim.params.RATE_OPTIONS`."""
+
+    posture: str = "mean"
+    max_stroke: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.posture not in POSTURES:
+            raise ValueError(f"posture must be one of {list(POSTURES)}, got {self.posture!r}")
+        if self.max_stroke is not None and not self.max_stroke > 0:
+            raise ValueError(f"max_stroke must be positive seconds or None, got {self.max_stroke}")
+
+    def for_model(self, model: Any) -> Settings:
+        """These settings as ``model`` can store them: unit postures need bone directions
+        and posture-relative vectors (``features="directions"``, ``offsets="mean"``),
+        else each channel's mean is kept."""
+        unit_ok = model.offsets == "mean" and getattr(model, "features", "zyz") == "directions"
+        return self if unit_ok or self.posture == "mean" else Settings("mean", self.max_stroke)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"posture": self.posture, "max_stroke_s": self.max_stroke}
+
+
+def budget_settings(**override: Any) -> Settings:
+    """The settings ``visprim imitate --budget`` uses: the defaults of
+    :data:`visprim.params.RATE_OPTIONS` (chosen by the nested leave-one-group-out of
+    :mod:`visprim.rate.nested`), with any of ``posture``, ``max_stroke`` given instead."""
+    from visprim.params import RATE_OPTIONS
+
+    values = {k: RATE_OPTIONS[k].default for k in ("posture", "max_stroke")}
+    unknown = set(override) - set(values)
+    if unknown:
+        raise ValueError(f"unknown budget setting(s) {sorted(unknown)}")
+    return Settings(**{**values, **override})
+
+
+def posture_numbers(model: Any, settings: Settings) -> int:
+    """Posture numbers stored per segment: none for absolute curves (``offsets="turns"``),
+    each channel's mean, or two per bone for unit bone directions (4 per arm)."""
+    if model.offsets != "mean":
+        return 0
+    c = int(model.n_channels)
+    return c // 3 * 2 if settings.for_model(model).posture == "unit" else c
+
+
+def rebuilt_postures(
+    model: Any, settings: Settings, postures: NDArray[np.float64], rebuilt: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Posture offsets ``(N, C)`` added to rebuilt posture-relative segment vectors
+    ``(N, d)``: the stored means ``postures`` themselves, or (``posture="unit"``) their unit
+    bone directions scaled by :func:`~visprim.rate.descriptions.unit_posture` for the
+    rebuilt shapes."""
+    from visprim.vectors import to_curves
+
+    if settings.for_model(model).posture == "mean" or model.offsets != "mean":
+        return postures
+    shapes = to_curves(rebuilt, int(model.n_channels))
+    return unit_posture(unit_bones(postures), shapes)
+
+
+def cut_vectors(model: Any, corpus: Any, max_stroke: float | None) -> Any:
+    """Segment vectors (:class:`visprim.vectors.SegmentVectors`, the model's offsets) of a
+    prepared one-trial ``corpus`` with every segment longer than ``max_stroke`` seconds cut
+    into equal parts (:func:`~visprim.rate.split_long`; ``model.vectorize`` for None)."""
+    from visprim.features import periodic_channels
+    from visprim.rate.benchmark import split_long
+    from visprim.vectors import time_to_frame, vectors_from_frames
+
+    if max_stroke is None or corpus.segmentation.n_segments == 0:
+        return model.vectorize(corpus)
+    bounds = split_long(corpus.segments[0], max_stroke)
+    frames = time_to_frame(corpus.times[0], bounds) + corpus.offsets[0]
+    return vectors_from_frames(
+        corpus.values,
+        frames[:, 0],
+        frames[:, 1],
+        trial=np.zeros(bounds.shape[0], dtype=np.int64),
+        starts=bounds[:, 0],
+        ends=bounds[:, 1],
+        n_samples=int(model.n_samples),
+        periodic_channels=periodic_channels(corpus.features, len(corpus.arms)),
+        offsets=str(model.offsets),
+    )
+
 
 # ---------------------------------------------------------------------------- one movement
 
@@ -30,6 +129,7 @@ class Description:
     numbers: int
     seconds: float
     q: int = 0
+    settings: Settings = Settings()
 
     @property
     def numbers_per_s(self) -> float:
@@ -60,20 +160,37 @@ class Description:
             "numbers": self.numbers,
             "seconds": self.seconds,
             "numbers_per_s": self.numbers_per_s,
+            "posture": self.settings.posture,
+            "max_stroke_s": self.settings.max_stroke,
         }
 
 
 def _candidates(
-    model: Any, vectors: NDArray[np.float64], seconds: float
+    model: Any,
+    vectors: NDArray[np.float64],
+    seconds: float,
+    settings: Settings | None = None,
+    postures: NDArray[np.float64] | None = None,
 ) -> tuple[list[tuple[Description, float]], Callable[[Description], NDArray[np.float64]]]:
     """Every description :func:`describe_segments` chooses from, with the squared error of
-    its rebuild, and the function that rebuilds the segments by one of them."""
+    its rebuild (posture included: the stored posture of ``settings`` against the segments'
+    own ``postures``), and the function that rebuilds the segments by one of them."""
     from visprim.vectors import amplitude_gains
 
     x = np.asarray(vectors, dtype=np.float64)
     n_seg = x.shape[0]
     f = int(model.n_components)
-    posture = int(model.n_channels) if model.offsets == "mean" else 0
+    settings = (settings or Settings()).for_model(model)
+    posture = posture_numbers(model, settings)
+    if postures is None:
+        postures = np.zeros((n_seg, int(model.n_channels)))
+    n_s = int(model.n_samples)
+
+    def error(r: NDArray[np.float64]) -> float:
+        off = rebuilt_postures(model, settings, postures, r) - postures
+        d = (x - r).reshape(n_seg, -1, n_s) + off[:, :, None]
+        return float(np.sum(d**2))
+
     p = model.transform(x)
     labels, _ = model.assign(p)
     centre = model.cluster_centers_[labels]
@@ -99,8 +216,8 @@ def _candidates(
     out = []
     for fam, m, q in options:
         numbers = movement_numbers(fam, n_seg, posture, m, q, c)
-        d = Description(fam, m, numbers, float(seconds), q)
-        out.append((d, float(np.sum((x - rebuild(d)) ** 2))))
+        d = Description(fam, m, numbers, float(seconds), q, settings)
+        out.append((d, error(rebuild(d))))
     return out, rebuild
 
 
@@ -111,6 +228,8 @@ def describe_segments(
     *,
     family: str | None = None,
     budget: float | None = None,
+    settings: Settings | None = None,
+    postures: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], Description]:
     """One movement's segment vectors ``(N, d)`` (``seconds`` long) rebuilt through a fitted
     :class:`~visprim.model.PrimitiveModel`, and the description used.
@@ -124,9 +243,13 @@ def describe_segments(
     the one whose rebuild lies
     closest to the segments (squared error of the segment vectors) among those that fit
     the budget. Posture numbers are counted for posture-relative models
-    (``offsets="mean"``); a model of absolute curves stores none.
+    (``offsets="mean"``; ``settings.posture``, :func:`posture_numbers`, 6 or 4 per arm, and
+    the closeness counts the posture's error too, the segments' own ``postures`` ``(N, C)``
+    against what is stored, :func:`rebuilt_postures`); a model of absolute curves stores
+    none. The rebuilt vectors are posture-relative: add
+    ``rebuilt_postures(model, description.settings, postures, rebuilt)``.
     """
-    candidates, rebuild = _candidates(model, vectors, seconds)
+    candidates, rebuild = _candidates(model, vectors, seconds, settings, postures)
     if budget is None:
         fam = family or ("nearest+gain" if model.amplitude else "nearest")
         if fam not in ("nearest", "nearest+gain", "projection"):
@@ -151,13 +274,20 @@ def share_budget(
     parts: Sequence[tuple[NDArray[np.float64], float]],
     span: float,
     budget: float,
+    settings: Settings | None = None,
+    postures: Sequence[NDArray[np.float64]] | None = None,
 ) -> list[float]:
     """Per-part budgets (numbers per second of each part) that share ``budget`` numbers per
     second of a ``span``-second recording between its parts (its arms imitated one by one,
     each ``(segment vectors, seconds)``): the combination of descriptions (one per part,
     :func:`describe_segments`) with the least summed squared error whose numbers together
-    fit ``budget × span``."""
-    options = [_candidates(model, x, sec)[0] for x, sec in parts]
+    fit ``budget × span``. ``settings`` and each part's ``postures`` as in
+    :func:`describe_segments`."""
+    posts = list(postures) if postures is not None else [None] * len(parts)
+    options = [
+        _candidates(model, x, sec, settings, post)[0]
+        for (x, sec), post in zip(parts, posts, strict=True)
+    ]
     total = budget * span * (1 + 1e-12)
     # Every combination, as arrays over the grid of one choice per part.
     numbers = np.zeros(())
