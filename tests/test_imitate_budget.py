@@ -84,7 +84,7 @@ def test_two_arms_share_the_budget(data) -> None:
     assert sh["numbers_per_s"] <= budget * (1 + 1e-9) and sh["numbers"] > d["numbers"]
     assert _err(shared) < _err(plain)
     with pytest.raises(ValueError, match="below the smallest description"):
-        imitate(model, both, play=False, budget=0.9 * d["numbers_per_s"])
+        imitate(model, both, play=False, budget=0.5 * d["numbers_per_s"])
 
 
 def test_a_budget_uses_the_rate_benchmark_settings(data) -> None:
@@ -96,10 +96,12 @@ def test_a_budget_uses_the_rate_benchmark_settings(data) -> None:
     plain = imitate(model, trial, play=False)
     d0 = plain.metrics["description"]
     assert d0["posture"] == "mean" and d0["max_stroke_s"] is None
-    result = imitate(model, trial, play=False, budget=1e4)
+    cut = {"max_stroke": RATE_OPTIONS["max_stroke"].default}
+    result = imitate(model, trial, play=False, budget=1e4, budget_options=cut)
     d = result.metrics["description"]
     assert d["posture"] == RATE_OPTIONS["posture"].default
     assert d["max_stroke_s"] == RATE_OPTIONS["max_stroke"].default
+    assert "stroke_cut_choice" not in d
     assert "strokes cut at" in result.summary() and "uncut" in plain.summary()
     # No stroke longer than max_stroke, and the cuts tile the uncut segments.
     durations = result.segments[:, 1] - result.segments[:, 0]
@@ -112,12 +114,12 @@ def test_a_budget_uses_the_rate_benchmark_settings(data) -> None:
     n = result.metrics["n_segments"]
     assert n > plain.metrics["n_segments"]
     least = (1 + 6 * n) / d["seconds"]
-    cheapest = imitate(model, trial, play=False, budget=least + 1e-9)
+    cheapest = imitate(model, trial, play=False, budget=least + 1e-9, budget_options=cut)
     c = cheapest.metrics["description"]
     assert c["numbers"] == 1 + 6 * n and c["description"] == "nearest primitive"
     assert c["numbers_per_s"] <= least + 1e-9
     with pytest.raises(ValueError, match="below the smallest description"):
-        imitate(model, trial, play=False, budget=0.99 * least)
+        imitate(model, trial, play=False, budget=0.99 * least, budget_options=cut)
     # The model's own storage within a budget, when asked for.
     old = imitate(model, trial, play=False, budget=1e4, budget_options={"max_stroke": None})
     assert old.metrics["n_segments"] == plain.metrics["n_segments"]
@@ -155,3 +157,37 @@ def test_unit_posture_keeps_the_mean_bone_directions(data) -> None:
     # Each bone's mean squared length is one, as for the unit bones of a movement.
     length2 = np.sum(curves.reshape(len(curves), curves.shape[1], -1, 3) ** 2, axis=3)
     assert np.allclose(length2.mean(axis=1), 1.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("budget", [12.0, 40.0])
+def test_the_encoder_chooses_to_cut_strokes_or_not(data, budget) -> None:
+    """Without a stroke cut given, the encoder describes the movement cut and uncut, each
+    within the budget less one number (the flag that says which), and keeps the one whose
+    rebuilt frames lie closer to the movement's; the choice is counted and stated."""
+    from visprim.params import RATE_OPTIONS
+
+    model, trial = data
+    span = imitate(model, trial, play=False).metrics["description"]["seconds"]
+    result = imitate(model, trial, play=False, budget=budget)
+    d = result.metrics["description"]
+    choice = d["stroke_cut_choice"]
+    assert choice["numbers"] == 1 and choice["cut_at_s"] == RATE_OPTIONS["max_stroke"].default
+    assert d["numbers_per_s"] <= budget * (1 + 1e-12)
+    # Each alternative forced, within the same numbers: none lies closer than the choice.
+    forced = {
+        key: imitate(
+            model,
+            trial,
+            play=False,
+            budget=budget - 1 / span,
+            budget_options={"max_stroke": cut_at},
+        )
+        for key, cut_at in (("cut", choice["cut_at_s"]), ("uncut", None))
+    }
+    for key, f in forced.items():
+        assert _err(f) == pytest.approx(choice["frames_rms_deg"][key], rel=1e-9)
+        assert _err(result) <= _err(f) + 1e-9
+    # The chosen one is what was kept, and its flag is counted.
+    kept = forced[choice["chosen"]].metrics["description"]
+    assert d["numbers"] == kept["numbers"] + 1 and d["max_stroke_s"] == kept["max_stroke_s"]
+    assert "encoder's choice" in result.summary() and "1 number" in d["counted"]

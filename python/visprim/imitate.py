@@ -292,6 +292,10 @@ def _size_line(d: dict[str, Any] | None) -> str:
     settings = f"; posture as {d.get('posture_numbers_per_segment', '-')}; strokes " + (
         "uncut" if cut is None else f"cut at {cut:g} s"
     )
+    choice = d.get("stroke_cut_choice")
+    if choice:
+        errs = ", ".join(f"{k} {v:.1f}°" for k, v in choice["frames_rms_deg"].items())
+        settings += f" (encoder's choice by its rebuild of the frames: {errs}; 1 number)"
     return (
         f"  description: {d['description']}, {d['numbers']} numbers in {d['seconds']:.2f} s = "
         f"{d['numbers_per_s']:.1f} numbers/s"
@@ -540,10 +544,78 @@ def _shares(
     return list(share_budget(model, parts, span, float(budget), settings, postures))
 
 
-def _description_metrics(parts: Sequence[_Segmented], budget: float | None) -> dict[str, Any]:
-    """The size of the description (numbers per second of movement), per arm and in all."""
+def _frames_error_deg(parts: Sequence[_Segmented]) -> float:
+    """The encoder's own rebuild error of a movement: bone-direction RMS (degrees) of the
+    rebuilt frames against the movement's frames, over the frames the segments cover, all
+    parts (arms) together. The same space whatever the segments, so descriptions with
+    different segment sets compare."""
+    from visprim.features import direction_rms_deg
+
+    total, n = 0.0, 0
+    for p in parts:
+        cov = (_segment_of_frame(p.times, p.bounds) >= 0) & (p.times >= p.rebuild.start - 1e-9)
+        cov &= p.times <= p.rebuild.end + 1e-9
+        if not cov.any():
+            continue
+        rebuilt, _ = p.rebuild(p.times[cov])
+        total += direction_rms_deg(rebuilt, p.human[cov]) ** 2 * int(cov.sum())
+        n += int(cov.sum())
+    return float(np.sqrt(total / n)) if n else float("inf")
+
+
+#: Numbers the encoder stores to say whether strokes were cut (one flag per movement).
+CUT_CHOICE_NUMBERS = 1
+
+
+def _cut_or_not(
+    model: Any, pieces: Sequence[Trial], source: Source, name: str, budget: float, settings: Any
+) -> tuple[list[_Segmented], dict[str, Any]]:
+    """The movement described both ways, strokes cut at ``settings.max_stroke`` and not cut,
+    each within ``budget`` less the :data:`CUT_CHOICE_NUMBERS` flag that says which; the one
+    whose rebuilt frames lie closer to the movement's (:func:`_frames_error_deg`) is kept.
+    The same rule for every recording: the encoder has the movement it describes."""
+    from dataclasses import replace
+
+    span = max(
+        float(np.max(sv.ends) - np.min(sv.starts))
+        for sv in (model.vectorize(model.prepare([t])) for t in pieces)
+    )
+    inner = budget - CUT_CHOICE_NUMBERS / span
+    tried: dict[str, tuple[list[_Segmented], float]] = {}
+    refused: dict[str, str] = {}
+    for key, s in (("cut", settings), ("uncut", replace(settings, max_stroke=None))):
+        try:
+            shares = _shares(model, pieces, inner, s)
+            parts = [
+                _segment_and_rebuild(model, t, source, name, b, s)
+                for t, b in zip(pieces, shares, strict=True)
+            ]
+        except ValueError as e:
+            refused[key] = str(e)
+            continue
+        tried[key] = (parts, _frames_error_deg(parts))
+    if not tried:
+        raise ValueError(next(iter(refused.values())))
+    chosen = min(tried, key=lambda k: tried[k][1])
+    choice = {
+        "chosen": chosen,
+        "cut_at_s": settings.max_stroke,
+        "rule": "the alternative whose rebuilt frames lie closest to the movement's "
+        "(bone-direction RMS over the covered frames), each within the budget less the flag",
+        "frames_rms_deg": {k: v[1] for k, v in tried.items()},
+        "refused": refused,
+        "numbers": CUT_CHOICE_NUMBERS,
+    }
+    return tried[chosen][0], choice
+
+
+def _description_metrics(
+    parts: Sequence[_Segmented], budget: float | None, choice: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """The size of the description (numbers per second of movement), per arm and in all;
+    ``choice``: the encoder's cut-or-not choice (:func:`_cut_or_not`), its flag counted."""
     descs = [p.description for p in parts]
-    numbers = sum(d.numbers for d in descs)
+    numbers = sum(d.numbers for d in descs) + (choice["numbers"] if choice else 0)
     seconds = max(d.seconds for d in descs)
     out: dict[str, Any] = {
         "budget_numbers_per_s": budget,
@@ -557,6 +629,9 @@ def _description_metrics(parts: Sequence[_Segmented], budget: float | None) -> d
         "counted": "per movement its start time; per segment the primitive id (none for "
         "the projection), the duration, the posture and the description's coefficients",
     }
+    if choice is not None:
+        out["stroke_cut_choice"] = choice
+        out["counted"] += f"; {choice['numbers']} number for the choice to cut strokes or not"
     if len(descs) > 1:
         out["arms"] = {side: d.to_dict() for side, d in zip(ARM_SIDES, descs, strict=False)}
     return out
@@ -680,11 +755,16 @@ def imitate(
         ``metrics["description"]`` states the size of the description used, with or without
         a budget. With a budget the segments are stored as the rate benchmark chose
         (:data:`visprim.params.RATE_OPTIONS`: each segment's posture as the unit bone
-        directions of its mean, 4 numbers per arm, and strokes longer than 0.8 s cut into
-        equal parts; :func:`visprim.rate.budget.budget_settings`); without, as the model
+        directions of its mean, 4 numbers per arm; :func:`visprim.rate.budget.budget_settings`)
+        and, unless ``budget_options`` gives ``max_stroke``, the encoder describes the
+        movement both with strokes longer than RATE_OPTIONS ``max_stroke`` (0.8 s) cut into
+        equal parts and uncut, each within the budget less one number (the flag that says
+        which, :data:`CUT_CHOICE_NUMBERS`), and keeps the one whose rebuilt frames lie closer
+        to the movement's (bone-direction RMS, :func:`_cut_or_not`;
+        ``metrics["description"]["stroke_cut_choice"]``). Without a budget, as the model
         does (6 posture numbers per arm, strokes uncut).
     budget_options : with ``budget``, settings in place of those defaults (``posture``:
-        "mean" or "unit"; ``max_stroke``: seconds or None).
+        "mean" or "unit"; ``max_stroke``: seconds or None, no choice then).
 
     Raises
     ------
@@ -710,12 +790,17 @@ def imitate(
     if budget is not None and source != "primitives":
         raise ValueError("budget picks the description through the primitives: leave source")
     pieces = split_arms(trial) if per_arm else [trial]
-    settings = _settings(budget, dict(budget_options or {})).for_model(model)
-    shares = _shares(model, pieces, budget, settings)
-    parts = [
-        _segment_and_rebuild(model, t, source, name, b, settings)
-        for t, b in zip(pieces, shares, strict=True)
-    ]
+    options = dict(budget_options or {})
+    settings = _settings(budget, options).for_model(model)
+    choice: dict[str, Any] | None = None
+    if budget is not None and "max_stroke" not in options and settings.max_stroke is not None:
+        parts, choice = _cut_or_not(model, pieces, source, name, float(budget), settings)
+    else:
+        shares = _shares(model, pieces, budget, settings)
+        parts = [
+            _segment_and_rebuild(model, t, source, name, b, settings)
+            for t, b in zip(pieces, shares, strict=True)
+        ]
     times = parts[0].times
     human = np.concatenate([p.human for p in parts], axis=1)
     rebuild: Rebuild | ArmsRebuild = (
@@ -785,7 +870,7 @@ def imitate(
         "rebuild_vs_human_rms_deg": _angle_rms(rb_a[cov] - human[cov]),
         "rebuild_vs_human_joint_rms_deg": _joint_rms(*joint_space_errors(rb_a[cov], human[cov])),
         "rebuild_vs_human_direction_rms_deg": direction_rms_deg(rb_a[cov], human[cov]),
-        "description": _description_metrics(parts, budget),
+        "description": _description_metrics(parts, budget, choice),
     }
 
     playback = None

@@ -188,8 +188,9 @@ def register(sub: Any) -> None:
         type=_stroke,
         default=argparse.SUPPRESS,
         metavar="S",
-        help=f"with --budget: {rate['max_stroke'].help}; 'none' or seconds (default "
-        f"{rate['max_stroke'].default})",
+        help=f"with --budget: {rate['max_stroke'].help}; 'none' or seconds (default: the "
+        f"encoder describes the movement both cut at {rate['max_stroke'].default} s and uncut, "
+        "and keeps the one whose rebuilt frames lie closer, counting 1 number for the choice)",
     )
     p.add_argument(
         "--servo",
