@@ -28,6 +28,7 @@ from visprim.sim.render import (
     Painter,
     PlaybackDrawer,
     _box,
+    _even_box,
     _Label,
     _union,
 )
@@ -159,15 +160,6 @@ class SideBySide:
         self._small = self.painter.finish(self._scratch)
         self._figure_box: tuple[int, int, int, int] | None = None
 
-    def _even_box(self, box: tuple[int, int, int, int]) -> tuple[int, int, int, int] | None:
-        """``box`` clipped to the canvas and widened to multiples of :data:`SUPERSAMPLE`, so
-        that its reduction is exactly that part of the reduced canvas."""
-        s = SUPERSAMPLE
-        w, h = self._scratch.size
-        x0, y0 = max(0, box[0]) // s * s, max(0, box[1]) // s * s
-        x1, y1 = min(w, -(-box[2] // s) * s), min(h, -(-box[3] // s) * s)
-        return (x0, y0, x1, y1) if x0 < x1 and y0 < y1 else None
-
     def human_frame(self, tau: float) -> Image.Image:
         """The human panel at video time ``tau`` seconds.
 
@@ -192,7 +184,7 @@ class SideBySide:
         figure = self.human_2d[i, : 4 * self.n_arms]
         self._figure_box = _box(figure, max(width / 2.0, r) + 2.0)
         dirty = _union(dirty, self._figure_box)
-        box = self._even_box(dirty) if dirty is not None else None
+        box = _even_box(dirty, self._scratch.size) if dirty is not None else None
         if box is not None:
             self._scratch.paste(self._trail.crop(box), box[:2])
         draw = ImageDraw.Draw(self._scratch)
