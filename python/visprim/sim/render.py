@@ -486,11 +486,21 @@ def _even_box(
 
 def _items_box(items: Sequence[tuple]) -> tuple[int, int, int, int] | None:
     """The pixel box that draw items (:meth:`Painter.body_items`) paint, with a margin for
-    their outlines and edges."""
-    box = None
+    their outlines and edges (None for no items)."""
+    if not items:
+        return None
+    pts, margins = [], []
     for _, _, geom, radius, _, _ in items:
-        box = _union(box, _box(geom, radius + 4.0))
-    return box
+        g = np.asarray(geom, dtype=np.float64).reshape(-1, 2)
+        pts.append(g)
+        margins.append(np.full(g.shape[0], radius + 4.0))
+    p, m = np.concatenate(pts), np.concatenate(margins)[:, None]
+    keep = np.isfinite(p).all(axis=1)
+    if not keep.any():
+        return None
+    lo = np.floor((p[keep] - m[keep]).min(axis=0)).astype(int)
+    hi = np.ceil((p[keep] + m[keep]).max(axis=0)).astype(int) + 1
+    return (int(lo[0]), int(lo[1]), int(hi[0]), int(hi[1]))
 
 
 def paste_layer(image: Image.Image, layer: Image.Image, box: Any) -> None:
