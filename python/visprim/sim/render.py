@@ -270,13 +270,17 @@ class _Label:
         ImageDraw.Draw(self.image).multiline_text(
             (left, pad - y0), text, font=font, fill=(40, 40, 40), spacing=3, align="center"
         )
+        # Opaque everywhere (a boxed label): pasted as RGB, without the mask (same pixels).
+        self.mask: Image.Image | None = self.image
+        if self.image.getextrema()[3][0] == 255:
+            self.image, self.mask = self.image.convert("RGB"), None
         x, y = xy
         x -= {"l": 0, "m": w / 2, "r": w}[anchor[0]]
         y -= {"a": 0, "m": h / 2, "d": h}[anchor[1]]
         self.xy = (int(round(x)), int(round(y)))
 
     def paste(self, image: Image.Image) -> None:
-        image.paste(self.image, self.xy, self.image)
+        image.paste(self.image, self.xy, self.mask)
 
 
 class PlaybackDrawer:
