@@ -272,7 +272,7 @@ class _Label:
         )
         # Opaque everywhere (a boxed label): pasted as RGB, without the mask (same pixels).
         self.mask: Image.Image | None = self.image
-        if self.image.getextrema()[3][0] == 255:
+        if self.image.getchannel("A").getextrema()[0] == 255:
             self.image, self.mask = self.image.convert("RGB"), None
         x, y = xy
         x -= {"l": 0, "m": w / 2, "r": w}[anchor[0]]
