@@ -270,13 +270,17 @@ class _Label:
         ImageDraw.Draw(self.image).multiline_text(
             (left, pad - y0), text, font=font, fill=(40, 40, 40), spacing=3, align="center"
         )
+        # Opaque everywhere (a boxed label): pasted as RGB, without the mask (same pixels).
+        self.mask: Image.Image | None = self.image
+        if self.image.getchannel("A").getextrema()[0] == 255:
+            self.image, self.mask = self.image.convert("RGB"), None
         x, y = xy
         x -= {"l": 0, "m": w / 2, "r": w}[anchor[0]]
         y -= {"a": 0, "m": h / 2, "d": h}[anchor[1]]
         self.xy = (int(round(x)), int(round(y)))
 
     def paste(self, image: Image.Image) -> None:
-        image.paste(self.image, self.xy, self.image)
+        image.paste(self.image, self.xy, self.mask)
 
 
 class PlaybackDrawer:
@@ -339,6 +343,18 @@ class PlaybackDrawer:
         self._path_end = 0
         self._path_box: tuple[int, int, int, int] | None = None
         self._marks_box = _box(np.concatenate([self.ref_2d, self.via_2d]), 4.0 * SUPERSAMPLE)
+        # The last frame drawn: its canvas, reduced, and the box its moving bodies covered. A
+        # frame redraws and reduces only the box that changed (the bodies that move, then and
+        # now, and what the overlays gained); ``_changed`` is what the overlays gained (None:
+        # nothing; the whole canvas after a restart).
+        self._canvas: Image.Image | None = None
+        self._small: Image.Image | None = None
+        self._bodies_box: tuple[int, int, int, int] | None = None
+        self._changed: tuple[int, int, int, int] | None = None
+
+    def _whole(self) -> tuple[int, int, int, int]:
+        w, h = self.painter.size
+        return (0, 0, w * SUPERSAMPLE, h * SUPERSAMPLE)
 
     def _layer(self) -> Image.Image:
         w, h = self.painter.size
@@ -368,17 +384,21 @@ class PlaybackDrawer:
                 draw.line(run, fill=(51, 89, 217), width=max(1, int(1.2 * s)))
             for j in range(self.via_2d.shape[0]):
                 self._dot(draw, j, False)
+            self._changed = self._whole()
         if np.any(reached & ~self._reached):
             draw = ImageDraw.Draw(self._marks)
             for hit in np.flatnonzero(reached & ~self._reached).tolist():
                 self._dot(draw, hit, True)
+                self._changed = _union(self._changed, _box(self.via_2d[hit], 4.0 * s))
             self._reached = reached
         if self._path is None or index < self._path_end:
             self._path, self._path_end, self._path_box = self._layer(), 0, None
+            self._changed = self._whole()
         if index > self._path_end:
             piece = self.path_2d[self._path_end : index + 1]
             p.polyline(ImageDraw.Draw(self._path), piece, (230, 102, 13), 1.6 * s)
             self._path_box = _union(self._path_box, _box(piece, 2.0 * s))
+            self._changed = _union(self._changed, _box(piece, 2.0 * s))
             self._path_end = index
         return [(self._marks, self._marks_box), (self._path, self._path_box)]
 
@@ -396,14 +416,29 @@ class PlaybackDrawer:
         frame (a pose between frames), and ``time`` (s, simulation) decides which via
         points are shown reached; the path taken is drawn up to frame ``index``."""
         pb, p = self.playback, self.painter
-        image, draw = p.canvas()
         tfs = pb.frames[index] if transforms is None else transforms
         items = p.body_items(tfs[self.moving], self.moving_shapes)
-        p.draw_items(draw, items + self.static_items)
         t = pb.frame_times[index] if time is None else time
-        for layer, box in self._overlays(index % pb.frames.shape[0], float(t)):
-            paste_layer(image, layer, box)
-        out = p.finish(image)
+        layers = self._overlays(index % pb.frames.shape[0], float(t))
+        bodies = _items_box(items)
+        if self._canvas is None or self._small is None:
+            self._canvas, _ = p.canvas()
+            self._small = p.finish(self._canvas)
+            self._changed = self._whole()
+        changed = _union(_union(self._changed, self._bodies_box), bodies)
+        self._changed, self._bodies_box = None, bodies
+        box = _even_box(changed, self._canvas.size) if changed is not None else None
+        if box is not None:
+            # Inside ``box``: white, every body back to front, the overlays — what a whole
+            # canvas would hold there. Outside it the canvas is stale, but never read.
+            image = self._canvas
+            image.paste((255, 255, 255), box)
+            p.draw_items(ImageDraw.Draw(image), items + self.static_items)
+            for layer, layer_box in layers:
+                paste_layer(image, layer, _intersection(layer_box, box))
+            s = SUPERSAMPLE
+            self._small.paste(p.finish(image.crop(box)), (box[0] // s, box[1] // s))
+        out = self._small.copy()
         for label in self.labels:
             label.paste(out)
         clock_text = f"t = {t if clock is None else clock:.2f} s"
@@ -429,6 +464,47 @@ def _union(
     if a is None or b is None:
         return a if b is None else b
     return (min(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), max(a[3], b[3]))
+
+
+def _intersection(
+    a: tuple[int, int, int, int] | None, b: tuple[int, int, int, int]
+) -> tuple[int, int, int, int] | None:
+    if a is None:
+        return None
+    out = (max(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), min(a[3], b[3]))
+    return out if out[0] < out[2] and out[1] < out[3] else None
+
+
+def _even_box(
+    box: tuple[int, int, int, int], size: tuple[int, int]
+) -> tuple[int, int, int, int] | None:
+    """``box`` clipped to a canvas of ``size`` and widened to multiples of
+    :data:`SUPERSAMPLE`, so that its reduction is exactly that part of the reduced canvas
+    (None if nothing is left)."""
+    s = SUPERSAMPLE
+    w, h = size
+    x0, y0 = max(0, box[0]) // s * s, max(0, box[1]) // s * s
+    x1, y1 = min(w, -(-box[2] // s) * s), min(h, -(-box[3] // s) * s)
+    return (x0, y0, x1, y1) if x0 < x1 and y0 < y1 else None
+
+
+def _items_box(items: Sequence[tuple]) -> tuple[int, int, int, int] | None:
+    """The pixel box that draw items (:meth:`Painter.body_items`) paint, with a margin for
+    their outlines and edges (None for no items)."""
+    if not items:
+        return None
+    pts, margins = [], []
+    for _, _, geom, radius, _, _ in items:
+        g = np.asarray(geom, dtype=np.float64).reshape(-1, 2)
+        pts.append(g)
+        margins.append(np.full(g.shape[0], radius + 4.0))
+    p, m = np.concatenate(pts), np.concatenate(margins)[:, None]
+    keep = np.isfinite(p).all(axis=1)
+    if not keep.any():
+        return None
+    lo = np.floor((p[keep] - m[keep]).min(axis=0)).astype(int)
+    hi = np.ceil((p[keep] + m[keep]).max(axis=0)).astype(int) + 1
+    return (int(lo[0]), int(lo[1]), int(hi[0]), int(hi[1]))
 
 
 def paste_layer(image: Image.Image, layer: Image.Image, box: Any) -> None:

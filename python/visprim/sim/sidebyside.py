@@ -27,7 +27,10 @@ from visprim.sim.render import (
     Camera,
     Painter,
     PlaybackDrawer,
+    _box,
+    _even_box,
     _Label,
+    _union,
 )
 from visprim.sim.video import write_video
 
@@ -142,35 +145,59 @@ class SideBySide:
         draw = ImageDraw.Draw(self.background)
         for run in self.finger_runs:
             draw.line(run, fill=(150, 150, 210), width=SUPERSAMPLE)
-        self._trail = self.background.copy()
-        self._trail_end = 0  # trail drawn up to this frame
+        self._reset_trail()
         self.start = float(imitation.rebuild.start - trial.times[0])
         end = max(self.human_times[-1], self.start + float(pb.frame_times[-1]))
         self.n_frames = int(np.floor(end * self.fps + 1e-9)) + 1
 
+    def _reset_trail(self) -> None:
+        """Start the trail again: nothing of it drawn, no stick figure on the scratch canvas."""
+        self._trail = self.background.copy()
+        self._trail_end = 0  # trail drawn up to this frame
+        # ``_scratch`` is the trail with the last stick figure drawn on it, and ``_small``
+        # its reduction: a frame restores, redraws and reduces only the box that changed.
+        self._scratch = self._trail.copy()
+        self._small = self.painter.finish(self._scratch)
+        self._figure_box: tuple[int, int, int, int] | None = None
+
     def human_frame(self, tau: float) -> Image.Image:
-        """The human panel at video time ``tau`` seconds."""
+        """The human panel at video time ``tau`` seconds.
+
+        Only the box that changed since the last frame (the last and the new stick figure,
+        the new piece of trail) is redrawn and reduced: the same pixels as drawing the whole
+        canvas and reducing it, at the cost of the box."""
         p = self.painter
         i = int(np.clip(np.searchsorted(self.human_times, tau, side="right") - 1, 0, None))
         s = SUPERSAMPLE
         if i < self._trail_end:  # earlier than the trail drawn so far: start it again
-            self._trail, self._trail_end = self.background.copy(), 0
+            self._reset_trail()
+        dirty = self._figure_box
         if i > self._trail_end:
             trail = ImageDraw.Draw(self._trail)
             for a in range(self.n_arms):
                 piece = self.human_2d[self._trail_end : i + 1, 4 * a + 3]
                 p.polyline(trail, piece, (230, 102, 13), 1.6 * s)
+                dirty = _union(dirty, _box(piece, 2.0 * s))
             self._trail_end = i
-        image = self._trail.copy()
-        draw = ImageDraw.Draw(image)
+        width = int(7 * s)
         r = 4.5 * s
+        figure = self.human_2d[i, : 4 * self.n_arms]
+        self._figure_box = _box(figure, max(width / 2.0, r) + 2.0)
+        dirty = _union(dirty, self._figure_box)
+        box = _even_box(dirty, self._scratch.size) if dirty is not None else None
+        if box is not None:
+            self._scratch.paste(self._trail.crop(box), box[:2])
+        draw = ImageDraw.Draw(self._scratch)
         for a in range(self.n_arms):
             pts = self.human_2d[i, 4 * a : 4 * a + 4]
             for u, v, col in zip(pts[:-1], pts[1:], _HUMAN_COLORS, strict=True):
-                draw.line((*u, *v), fill=col, width=int(7 * s))
+                draw.line((*u, *v), fill=col, width=width)
             for x, y in pts:
                 draw.ellipse((x - r, y - r, x + r, y + r), fill=(60, 60, 60))
-        out = p.finish(image)
+        if box is not None:
+            part = p.finish(self._scratch.crop(box))
+            self._small.paste(part, (box[0] // s, box[1] // s))
+        out = self._small.copy()
         for label in self.labels:
             label.paste(out)
         p.text(out, (self.size[0] - 4, 4), f"t = {tau:.2f} s", TEXT_PX, "ra")

@@ -132,17 +132,23 @@ def _mp4(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
     import imageio_ffmpeg
 
     writer = None
+    size = (0, 0)
     n = 0
     try:
         for im in frames:
-            a = np.asarray(im.convert("RGB"))
-            h, w = a.shape[:2]
+            rgb = im if im.mode == "RGB" else im.convert("RGB")
+            w, h = rgb.size
+            data: bytes | np.ndarray
             if h % 2 or w % 2:
-                a = np.pad(a, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
+                a = np.pad(np.asarray(rgb), ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
+                data, (w, h) = np.ascontiguousarray(a), (a.shape[1], a.shape[0])
+            else:
+                data = rgb.tobytes()  # the pixels, one copy (the encoder reads bytes)
             if writer is None:
+                size = (w, h)
                 writer = imageio_ffmpeg.write_frames(
                     str(tmp),
-                    (a.shape[1], a.shape[0]),
+                    size,
                     fps=fps,
                     codec="libx264",
                     pix_fmt_out="yuv420p",
@@ -150,7 +156,9 @@ def _mp4(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
                     output_params=["-f", "mp4"],
                 )
                 writer.send(None)
-            writer.send(np.ascontiguousarray(a))
+            elif (w, h) != size:
+                raise ValueError(f"write_video: frame {n} is {rgb.size}, the first {size}")
+            writer.send(data)
             n += 1
         if writer is None:
             raise ValueError("write_video: no frames to write")
