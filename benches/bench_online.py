@@ -303,6 +303,19 @@ def report(stamp: dict[str, Any], fid: dict[str, Any], notes: list[str], thr: An
         "(1/5/15 min). The machine was shared with other jobs: throughput is a lower bound.",
         f"command: `{stamp['command']}` · segmenter options: {stamp['options']}",
         "",
+    ]
+    if fid:
+        lines += _fidelity_lines(fid, notes)
+    src, rows = thr
+    if rows:
+        lines += _throughput_lines(src, rows)
+    if mem is not None:
+        lines += _memory_lines(mem)
+    return "\n".join(lines) + "\n"
+
+
+def _fidelity_lines(fid: dict[str, Any], notes: list[str]) -> list[str]:
+    lines = [
         "## fidelity: online vs offline (same model), ±100 ms",
         "",
         "| recordings | trials | boundary F1 (P / R) | primitive equal | final class equal | "
@@ -330,9 +343,11 @@ def report(stamp: dict[str, Any], fid: dict[str, Any], notes: list[str], thr: An
         "",
     ]
     lines += [f"- {n}" for n in notes]
-    src, rows = thr
-    lines += [
-        "",
+    return lines + [""]
+
+
+def _throughput_lines(src: str, rows: list[dict[str, Any]]) -> list[str]:
+    lines = [
         f"## throughput, one stream, one core ({src})",
         "",
         "| classifier | chunk (frames) | stream (frames) | frames/s median | range | runs |",
@@ -343,26 +358,27 @@ def report(stamp: dict[str, Any], fid: dict[str, Any], notes: list[str], thr: An
             f"| {r['classifier']} | {r['chunk']} | {r['frames']:,} | {r['median']:,.0f} | "
             f"{r['min']:,.0f}–{r['max']:,.0f} | {r['runs']} |"
         )
-    lines += ["", "Target: ≥ 10,000 frames/s.", ""]
-    if mem is not None:
-        lines += [
-            f"## memory over {mem['stream_minutes']:.0f} minutes of stream "
-            f"({mem['frames']:,} frames, chunks of 8, open-end DTW recogniser, "
-            f"{mem['events']:,} events, {mem['wall_seconds']:.0f} s wall)",
-            "",
-            "| measure | at 1 min | largest growth after 1 min | last − 1 min |",
-            "|---|---:|---:|---:|",
-            f"| Python allocations (tracemalloc) | {mem['traced_at_1min'] / 1e6:.2f} MB | "
-            f"{mem['traced_growth_after_1min'] / 1e3:+.1f} kB | "
-            f"{mem['traced_last_minus_1min'] / 1e3:+.1f} kB |",
-            f"| process RSS | {mem['rss_at_1min'] / 1e6:.1f} MB | "
-            f"{mem['rss_growth_after_1min'] / 1e6:+.2f} MB | |",
-            f"| pipeline buffers (`buffer_bytes`) | {mem['buffer_bytes']} | | |",
-            "",
-            "Target: flat (no growth past the first minute).",
-            "",
-        ]
-    return "\n".join(lines) + "\n"
+    return lines + ["", "Target: ≥ 10,000 frames/s.", ""]
+
+
+def _memory_lines(mem: Any) -> list[str]:
+    return [
+        f"## memory over {mem['stream_minutes']:.0f} minutes of stream "
+        f"({mem['frames']:,} frames, chunks of 8, open-end DTW recogniser, "
+        f"{mem['events']:,} events, {mem['wall_seconds']:.0f} s wall)",
+        "",
+        "| measure | at 1 min | largest growth after 1 min | last − 1 min |",
+        "|---|---:|---:|---:|",
+        f"| Python allocations (tracemalloc) | {mem['traced_at_1min'] / 1e6:.2f} MB | "
+        f"{mem['traced_growth_after_1min'] / 1e3:+.1f} kB | "
+        f"{mem['traced_last_minus_1min'] / 1e3:+.1f} kB |",
+        f"| process RSS | {mem['rss_at_1min'] / 1e6:.1f} MB | "
+        f"{mem['rss_growth_after_1min'] / 1e6:+.2f} MB | |",
+        f"| pipeline buffers (`buffer_bytes`) | {mem['buffer_bytes']} | | |",
+        "",
+        "Target: flat (no growth past the first minute).",
+        "",
+    ]
 
 
 def main(argv: list[str] | None = None) -> int:

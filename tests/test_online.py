@@ -258,3 +258,24 @@ def test_evaluate_online_writes_the_early_recognition_curve(
     assert all(0.0 <= a <= 1.0 for a in result["accuracy"])
     # Well above chance (4 gestures) once the whole movement is seen.
     assert result["closed_end_accuracy"] > 0.5
+
+
+def test_early_confirmation_emits_inner_boundaries_sooner(fitted) -> None:
+    model, _, test = fitted
+    early: list[float] = []
+    late: list[float] = []
+    for t in test:
+        for confirm, latencies in ((1, early), (None, late)):
+            pipe = OnlinePipeline(model, None, confirm_frames=confirm)
+            events = list(pipe.replay(t, chunk=5))
+            ends = {(e.movement, e.n_segments - 1) for e in events if isinstance(e, MovementEnded)}
+            latencies.extend(
+                e.latency
+                for e in events
+                if isinstance(e, SegmentClosed) and (e.movement, e.index) not in ends
+            )
+    assert early and late
+    # Emitted once the speed is back above c, not after the next stroke's 5° of travel.
+    assert np.median(early) < np.median(late), (np.median(early), np.median(late))
+    with pytest.raises(ValueError, match="confirm_frames"):
+        OnlinePipeline(model, None, confirm_frames=0)

@@ -605,6 +605,14 @@ ONLINE_OPTIONS: Mapping[str, OnlineOption] = {
             "deg",
         ),
         OnlineOption(
+            "confirm_frames",
+            1,
+            "an inner boundary is emitted once the next run of fast frames has lasted this "
+            "many frames (or travelled min_travel_deg, whichever comes first; None: travel "
+            "only, as offline SEG-2; 1: as soon as the speed is back above c)",
+            "frames",
+        ),
+        OnlineOption(
             "segment_filter",
             "zero_phase",
             "a closed segment is described after the model's zero-phase filter over the "

@@ -18,8 +18,12 @@ Stages, each causal, frame by frame (chunks of any size give the same segments):
 4. **SEG-2 with the fitted constant** ``c = seg2_threshold_`` and the model's rules
    (:mod:`visprim.segment.seg2`): runs of ``z ≥ c`` that travel more than
    ``min_travel_deg``; a boundary between two such runs at the smallest ``z`` of the rest
-   between them, known when the second run becomes significant (its travel passes
-   ``min_travel_deg``); the movement's onset and offset where the arm is at rest
+   between them, emitted as soon as the second run has lasted ``confirm_frames`` frames
+   above ``c`` (default 1: the first frame back above ``c``) or its travel passes
+   ``min_travel_deg``, whichever comes first (``confirm_frames=None``: the travel only,
+   offline's rule; a run confirmed early counts as a movement whatever its travel). The
+   first run of a movement still opens it only once its travel passes ``min_travel_deg``;
+   the movement's onset and offset where the arm is at rest
    (``z ≤ c / 25``, the robust tuning's rule; the local minima of ``z`` for models tuned
    by repetitions). ``threshold="adaptive"`` lowers ``c`` for slow movers as the robust
    tuning does per trial, from the 95th percentile of ``z`` over the last
@@ -39,8 +43,10 @@ gives the segment the offline shape (the causal order-2 filter lags and smooths 
 ``"causal"`` uses the causally filtered values.
 
 Latency (stream time from a segment's last frame to its event): the low-pass' group delay
-+ one frame (velocity) + the time the next run needs to become significant (inner
-boundaries) or ``rest_timeout`` (a movement's last segment). Memory: ring buffers of
++ one frame (velocity) + the time from the slowest point of the gap until the next run
+has lasted ``confirm_frames`` frames above ``c`` (inner boundaries: the gap's slowest
+point is only known once the arm speeds up again, so a long pause costs its second half)
+or ``rest_timeout`` (a movement's last segment). Memory: ring buffers of
 ``max_segment`` seconds of frames (a longer segment is cut there, ``forced=True``) and of
 ``speed_window`` seconds of ``z``, allocated once.
 """
@@ -171,6 +177,9 @@ class OnlineSegmenter:
         Window of the adaptive threshold's 95th percentile of ``z`` (default 10 s).
     min_travel_deg : float, degrees
         Travel that makes a run of ``z ≥ c`` a movement (SEG-2's, default 5°).
+    confirm_frames : int ≥ 1 or None, frames
+        Frames above ``c`` of the next run that confirm an inner boundary (default 1;
+        None: its travel must pass ``min_travel_deg``, as offline).
     segment_filter : {"zero_phase", "causal"}
         Values a closed segment is described by (module docstring; default
         ``"zero_phase"``).
@@ -187,6 +196,7 @@ class OnlineSegmenter:
         speed_window: float = _O["speed_window"],
         min_travel_deg: float = _O["min_travel_deg"],
         segment_filter: str = _O["segment_filter"],
+        confirm_frames: int | None = _O["confirm_frames"],
     ) -> None:
         model._check_fitted()
         c = getattr(model, "seg2_threshold_", None)
@@ -197,6 +207,13 @@ class OnlineSegmenter:
                 f"segment_filter must be 'zero_phase' or 'causal', got {segment_filter!r}"
             )
         self.segment_filter = segment_filter
+        if confirm_frames is not None and not (
+            isinstance(confirm_frames, int | np.integer) and confirm_frames >= 1
+        ):
+            raise ValueError(
+                f"confirm_frames must be a number of frames ≥ 1 or None, got {confirm_frames!r}"
+            )
+        self.confirm_frames = None if confirm_frames is None else int(confirm_frames)
         if threshold not in ("fixed", "adaptive"):
             raise ValueError(f"threshold must be 'fixed' or 'adaptive', got {threshold!r}")
         for name, v in (("rest_timeout", rest_timeout), ("max_segment", max_segment)):
@@ -245,6 +262,7 @@ class OnlineSegmenter:
         self._run_start = -1
         self._run_travel = 0.0
         self._run_sig = False
+        self._run_confirmed = False
         self._run_min = (math.inf, -1)
         # movement
         self.movement = -1
@@ -459,6 +477,7 @@ class OnlineSegmenter:
                 self._run_start = f
                 self._run_travel = 0.0
                 self._run_sig = False
+                self._run_confirmed = False
                 self._run_min = (z, f)
             else:
                 self._run_travel += step
@@ -466,11 +485,24 @@ class OnlineSegmenter:
                     self._run_min = (z, f)
             if not self._run_sig and self._run_travel > self.min_travel:
                 self._run_sig = True
+                if not self._run_confirmed:
+                    self._significant(f, t, emitted, out)
+            elif (
+                self._open
+                and not self._run_sig
+                and not self._run_confirmed
+                and self.confirm_frames is not None
+                and f - self._run_start + 1 >= self.confirm_frames
+            ):
+                # Early confirmation: the run has lasted confirm_frames frames above c; the
+                # boundary at the slowest point of the gap is emitted now, and the run
+                # counts as a movement whatever its travel.
+                self._run_confirmed = True
                 self._significant(f, t, emitted, out)
         else:
             if self._in_run:
                 self._in_run = False
-                if self._run_sig:
+                if self._run_sig or self._run_confirmed:
                     # A significant run ended: the gap starts here.
                     self._gap_min = (math.inf, -1)
                     self._offset = -1
