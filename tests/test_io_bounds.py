@@ -57,7 +57,8 @@ def lying_npz(path: Path, shape: tuple[int, ...], zeros: int) -> Path:
 
 
 def read_in_child(path: Path, limit_gb: float = 2.0) -> tuple[str, int]:
-    """(outcome, peak RSS in MB) of ``read(path)`` in a child with an address-space cap."""
+    """(outcome, peak RSS in MB, the child's own) of ``read(path)`` in a child with an
+    address-space cap."""
     code = textwrap.dedent(
         f"""
         import resource, sys
@@ -70,7 +71,10 @@ def read_in_child(path: Path, limit_gb: float = 2.0) -> tuple[str, int]:
             out = "ReadError " + str(exc)
         except BaseException as exc:
             out = "other " + type(exc).__name__ + " " + str(exc)
-        rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss // 1024
+        # VmHWM is this program's own peak: ru_maxrss would also count the parent's
+        # memory, which a vfork-started child inherits until its exec.
+        status = open("/proc/self/status").read().split("VmHWM:")[1]
+        rss = int(status.split()[0]) // 1024
         print(out.replace(chr(10), " ")); print(rss)
         """
     )
