@@ -480,7 +480,7 @@ def arm_velocities(trial: Trial) -> NDArray[np.float64]:
 def duration_costs(
     queries: Sequence[Trial], references: Sequence[Trial] | None = None
 ) -> NDArray[np.float64]:
-    """|log(T_q / T_r)| between the movements' durations (T, seconds): how many times
+    """``|log(T_q / T_r)|`` between the movements' durations (T, seconds): how many times
     longer one lasts than the other, which DTW's length-normalised cost discards."""
     q = np.log(np.array([max(t.duration, 1e-9) for t in queries]))
     r = q if references is None else np.log(np.array([max(t.duration, 1e-9) for t in references]))
@@ -752,7 +752,7 @@ class MotionClassifier(_NearestSequences):
 
       ``D_velocity`` is the DTW cost of the bones' angular velocities
       (:func:`arm_velocities`: how fast and which way each bone turns, the rhythm that
-      warping hides), ``D_duration`` the ratio of the durations |log(T_q / T_r)|
+      warping hides), ``D_duration`` the ratio of the durations ``|log(T_q / T_r)|``
       (:func:`duration_costs`: how long the movement lasts, which the length-normalised
       DTW cost discards). The three weights are chosen in ``fit`` from ``term_weights``
       (4³ = 64 candidates) by leave-one-group-out 1-NN accuracy on the training movements
