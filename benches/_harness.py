@@ -1,11 +1,15 @@
-"""Timing helpers for the Python benchmarks: medians of repeated runs and one table."""
+"""Helpers for the Python benchmarks: medians of repeated runs, one table, and the CPU and
+commit that stamp a result."""
 
 from __future__ import annotations
 
+import platform
 import statistics
+import subprocess
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 
@@ -63,3 +67,37 @@ class Table:
             print("|---|---|---:|")
             for w, r, x in self.ratios:
                 print(f"| {w} | {r} | {x:.2f}x |")
+
+
+def cpu_model() -> str:
+    """The CPU's model name (``/proc/cpuinfo``), for the stamp of a result table."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def commit() -> str:
+    """The short commit of this checkout, marked ``(modified)`` when tracked files differ
+    from it, for the stamp of a result table; ``unknown`` outside git."""
+    root = str(Path(__file__).resolve().parents[1])
+    try:
+        out = subprocess.run(
+            ["git", "-C", root, "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        dirty = subprocess.run(
+            ["git", "-C", root, "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        return out.stdout.strip() + (" (modified)" if dirty.stdout.strip() else "")
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"

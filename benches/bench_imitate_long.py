@@ -26,7 +26,6 @@ from __future__ import annotations
 import argparse
 import datetime
 import os
-import platform
 import statistics
 import subprocess
 import sys
@@ -36,6 +35,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from _harness import commit, cpu_model
 from visprim import PrimitiveModel, kernels
 from visprim.datasets import imitation_experiment
 from visprim.io.markers_csv import write_marker_csv
@@ -104,36 +104,6 @@ def run_once(argv: list[str]) -> tuple[float, float, float, float]:
     return wall, cpu, usage.ru_maxrss / 1024.0, peak[0] / 2**20
 
 
-def _commit() -> str:
-    try:
-        out = subprocess.run(
-            ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
-            capture_output=True,
-            text=True,
-            check=True,
-        )
-        dirty = subprocess.run(
-            ["git", "-C", str(ROOT), "status", "--porcelain", "--untracked-files=no"],
-            capture_output=True,
-            text=True,
-            check=True,
-        )
-        return out.stdout.strip() + (" (modified)" if dirty.stdout.strip() else "")
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
-def _cpu() -> str:
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
 def _spread(values: list[float], fmt: str) -> str:
     med = statistics.median(values)
     return f"{med:{fmt}} [{min(values):{fmt}}, {max(values):{fmt}}]"
@@ -151,7 +121,7 @@ def main() -> None:
         f"# imitate on long recordings — {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M UTC}"
     )
     print(
-        f"commit {_commit()} · CPU {_cpu()} · {os.cpu_count()} cores · instruction set "
+        f"commit {commit()} · CPU {cpu_model()} · {os.cpu_count()} cores · instruction set "
         f"{kernels.instruction_set()} · Python {sys.version.split()[0]}"
     )
     print(f"load average at start: {load0[0]:.1f} / {load0[1]:.1f} / {load0[2]:.1f} (1/5/15 min)")

@@ -36,9 +36,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import statistics
-import subprocess
 import sys
 import time
 import tracemalloc
@@ -47,6 +45,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from _harness import commit, cpu_model
 from visprim import kernels
 from visprim.atomic import write_text
 from visprim.classify import DTWClassifier, MotionClassifier, group_folds
@@ -61,27 +60,6 @@ PERIOD = 0.034
 CHUNKS = (1, 8, 64, 1024)
 #: Chunk of the fidelity replays (the events do not depend on it; tests/test_online.py).
 FIDELITY_CHUNK = 32
-
-
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
-def _commit() -> str:
-    try:
-        out = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=True
-        )
-        dirty = subprocess.run(["git", "status", "--porcelain"], capture_output=True, text=True)
-        return out.stdout.strip() + (" (modified)" if dirty.stdout.strip() else "")
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def _rss() -> int:
@@ -415,8 +393,8 @@ def main(argv: list[str] | None = None) -> int:
     load0 = os.getloadavg()
     stamp = {
         "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"),
-        "commit": _commit(),
-        "cpu": _cpu(),
+        "commit": commit(),
+        "cpu": cpu_model(),
         "cores": os.cpu_count(),
         "instruction_set": kernels.instruction_set(),
         "python": sys.version.split()[0],

@@ -25,13 +25,13 @@ import datetime
 import os
 import platform
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+from _harness import commit, cpu_model
 from visprim import atomic, kernels
 
 HERE = Path(__file__).resolve().parent
@@ -45,30 +45,6 @@ CONFIGS = [
 ]
 # the configurations' table reads `--view` with read_video_pieces (pose estimation and the
 # trial); the views' table times video_poses alone on each view.
-
-
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "?"
-
-
-def _commit() -> str:
-    try:
-        out = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"],
-            capture_output=True,
-            text=True,
-            check=True,
-            cwd=HERE,
-        )
-        return out.stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "?"
 
 
 def _load() -> str:
@@ -172,7 +148,7 @@ def main() -> int:
     w, h = ref.size
     lines = [
         f"# video → trial throughput — {when}",
-        f"commit {_commit()} · CPU {_cpu()} · {os.cpu_count()} cores · instruction set "
+        f"commit {commit()} · CPU {cpu_model()} · {os.cpu_count()} cores · instruction set "
         f"{kernels.instruction_set()} · Python {platform.python_version()}",
         f"load average (1/5/15 min) before: {load_before}; after: {load_after} "
         "(a shared machine: a load above the core count means the bench had only part of it)",

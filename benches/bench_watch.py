@@ -24,14 +24,13 @@ from __future__ import annotations
 
 import argparse
 import os
-import platform
 import statistics
-import subprocess
 import time
 from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
+from _harness import commit, cpu_model
 from visprim import kernels
 from visprim.io import read
 from visprim.model import PrimitiveModel
@@ -50,29 +49,6 @@ TRAIN = [
     "HDM_bk_grabHighR_005_120.amc",
     "HDM_bk_throwBasketball_004_120.amc",
 ]
-
-
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
-def _commit() -> str:
-    try:
-        out = subprocess.run(
-            ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
-            capture_output=True,
-            text=True,
-            check=True,
-        )
-        return out.stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def one_run(model: PrimitiveModel, trial: Trial) -> dict[str, float]:
@@ -133,7 +109,7 @@ def main() -> None:
 
     print()
     print(
-        f"{datetime.now(UTC):%Y-%m-%d %H:%M} UTC, commit {_commit()}, {_cpu()}, "
+        f"{datetime.now(UTC):%Y-%m-%d %H:%M} UTC, commit {commit()}, {cpu_model()}, "
         f"kernels {kernels.instruction_set()}, load average {load0[0]:.1f} -> {load1[0]:.1f} "
         f"(shared machine); {len(rows)} recordings, median of {args.repeat} runs each"
     )

@@ -45,14 +45,13 @@ import dataclasses
 import datetime
 import io
 import os
-import platform
-import subprocess
 import sys
 import tempfile
 from contextlib import redirect_stdout
 from pathlib import Path
 
 import numpy as np
+from _harness import commit, cpu_model
 from numpy.typing import NDArray
 from visprim import kernels
 from visprim.atomic import write_text
@@ -74,26 +73,6 @@ HIPS = {"right": 24, "left": 23}
 MIN_CONFIDENCE = 0.5
 
 Array = NDArray[np.float64]
-
-
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "?"
-
-
-def _commit() -> str:
-    try:
-        out = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=True
-        )
-        return out.stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "?"
 
 
 def _unit(v: Array) -> Array:
@@ -250,7 +229,7 @@ def report(folder: Path) -> str:
         load0 = os.getloadavg()
         print(f"# video accuracy — {datetime.datetime.now(datetime.UTC):%Y-%m-%d %H:%M UTC}")
         print(
-            f"commit {_commit()} · CPU {_cpu()} · {os.cpu_count()} cores · instruction set "
+            f"commit {commit()} · CPU {cpu_model()} · {os.cpu_count()} cores · instruction set "
             f"{kernels.instruction_set()} · Python {sys.version.split()[0]} · load average "
             f"{load0[0]:.1f} / {load0[1]:.1f} / {load0[2]:.1f} (1/5/15 min; shared machine)"
         )

@@ -142,25 +142,28 @@ class RateResult:
         out = []
         for fam, param in keys:
             rs = [r for r in self.rows if r["family"] == fam and r["param"] == param]
-            per_group = [
-                float(np.median([r["bone_deg"] for r in rs if r["group"] == g]))
-                for g in self.groups
-                if any(r["group"] == g for r in rs)
-            ]
-            out.append(
-                {
-                    "benchmark": self.benchmark,
-                    "family": fam,
-                    "param": param,
-                    "numbers_per_s": sum(r["numbers"] for r in rs) / sum(r["seconds"] for r in rs),
-                    "bone_deg_median": float(np.median([r["bone_deg"] for r in rs])),
-                    "bone_deg_group_min": min(per_group),
-                    "bone_deg_group_max": max(per_group),
-                    "joint_deg_median": float(np.median([r["joint_deg"] for r in rs])),
-                    "movements": len(rs),
-                }
-            )
+            head = {"benchmark": self.benchmark, "family": fam, "param": param}
+            out.append({**head, **summarise_rows(rs, self.groups)})
         return out
+
+
+def summarise_rows(rows: Sequence[dict[str, Any]], groups: Sequence[Any]) -> dict[str, Any]:
+    """Of the scored movements ``rows`` of one description: the rate (all numbers over all
+    seconds), the median bone-direction and joint-space RMS (degrees), the lowest and
+    highest per-group median of the bone-direction RMS, and how many movements."""
+    per_group = [
+        float(np.median([r["bone_deg"] for r in rows if r["group"] == g]))
+        for g in groups
+        if any(r["group"] == g for r in rows)
+    ]
+    return {
+        "numbers_per_s": sum(r["numbers"] for r in rows) / sum(r["seconds"] for r in rows),
+        "bone_deg_median": float(np.median([r["bone_deg"] for r in rows])),
+        "bone_deg_group_min": min(per_group),
+        "bone_deg_group_max": max(per_group),
+        "joint_deg_median": float(np.median([r["joint_deg"] for r in rows])),
+        "movements": len(rows),
+    }
 
 
 def _score(

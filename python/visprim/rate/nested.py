@@ -16,8 +16,6 @@ from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-import numpy as np
-
 from visprim.params import RATE_OPTIONS
 from visprim.rate.benchmark import (
     RateResult,
@@ -26,6 +24,7 @@ from visprim.rate.benchmark import (
     _prepare,
     held_out_movements,
     read_benchmarks,
+    summarise_rows,
 )
 from visprim.rate.report import best_within
 from visprim.trial import split_arms
@@ -64,25 +63,8 @@ class NestedResult:
         for budget in dict.fromkeys(r["budget"] for r in self.rows):
             for kind in dict.fromkeys(r["kind"] for r in self.rows if r["budget"] == budget):
                 rs = [r for r in self.rows if r["budget"] == budget and r["kind"] == kind]
-                per_group = [
-                    float(np.median([r["bone_deg"] for r in rs if r["group"] == g]))
-                    for g in self.groups
-                    if any(r["group"] == g for r in rs)
-                ]
-                out.append(
-                    {
-                        "benchmark": self.benchmark,
-                        "budget": budget,
-                        "kind": kind,
-                        "numbers_per_s": sum(r["numbers"] for r in rs)
-                        / sum(r["seconds"] for r in rs),
-                        "bone_deg_median": float(np.median([r["bone_deg"] for r in rs])),
-                        "bone_deg_group_min": min(per_group),
-                        "bone_deg_group_max": max(per_group),
-                        "joint_deg_median": float(np.median([r["joint_deg"] for r in rs])),
-                        "movements": len(rs),
-                    }
-                )
+                head = {"benchmark": self.benchmark, "budget": budget, "kind": kind}
+                out.append({**head, **summarise_rows(rs, self.groups)})
         return out
 
 
