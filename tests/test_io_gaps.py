@@ -260,3 +260,19 @@ def test_c3d_truncated_and_garbage_files(tennis: Path, tmp_path: Path) -> None:
     empty.write_bytes(b"")
     with pytest.raises(TruncatedFileError, match="empty"):
         read(empty)
+
+
+def test_reader_warnings_from_worker_processes_reach_the_caller(
+    tennis: Path, tmp_path: Path
+) -> None:
+    """`read_movements` reads in spawned workers; a reader's warning (here a piece shorter
+    than min_duration dropped before a long gap) is handed back and raised in the caller,
+    where the CLI shows it as a ``warning:`` line, not printed raw by the worker."""
+    from visprim.evaluate import Recording, read_movements
+
+    gappy = _with_gap(tennis, tmp_path / "g.c3d", "Derrick:RWRB", slice(10, 60))
+    recordings = [Recording(gappy, "serve")] * 4  # four: the worker pool is used
+    with pytest.warns(UserWarning, match=r"g\.c3d: dropped 1 piece") as caught:
+        trials, errors = read_movements(recordings, arm="right", jobs=2)
+    assert errors == [] and all(t is not None for t in trials)
+    assert sum("dropped 1 piece" in str(w.message) for w in caught) == 4

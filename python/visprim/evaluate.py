@@ -45,6 +45,7 @@ import csv
 import io
 import os
 import time
+import warnings
 from collections import Counter
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -200,16 +201,21 @@ def find_recordings(
     return found, unlabelled
 
 
-def _read_one(path: Path, period: float, arm: str = "both") -> Trial | str:
-    """The recording as a trial, or the one-line reason it cannot be read."""
+def _read_one(path: Path, period: float, arm: str = "both") -> tuple[Trial | str, list[str]]:
+    """The recording as a trial, or the one-line reason it cannot be read, with the
+    warnings the reader gave (a worker process hands them back to be shown here)."""
     from visprim.io import read
 
-    try:
-        if path.suffix.lower() == ".csv":  # the marker CSV holds one (right) arm
-            return read(path, "right", resample=period)
-        return read(path, arm, resample=period)
-    except ValueError as exc:  # ReadError and bad content: skip the file, say why
-        return str(exc).splitlines()[0] if str(exc) else f"{path}: unreadable"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            if path.suffix.lower() == ".csv":  # the marker CSV holds one (right) arm
+                result: Trial | str = read(path, "right", resample=period)
+            else:
+                result = read(path, arm, resample=period)
+        except ValueError as exc:  # ReadError and bad content: skip the file, say why
+            result = str(exc).splitlines()[0] if str(exc) else f"{path}: unreadable"
+    return result, [str(w.message) for w in caught]
 
 
 def read_movements(
@@ -227,7 +233,7 @@ def read_movements(
     place of a recording that cannot be read, and one line per such recording."""
     paths = [r.path for r in recordings]
     jobs = max(1, jobs if jobs is not None else (os.cpu_count() or 1))
-    results: list[Trial | str] = []
+    results: list[tuple[Trial | str, list[str]]] = []
     if jobs == 1 or len(paths) < 4:
         for p in paths:
             results.append(_read_one(p, period, arm))
@@ -246,8 +252,11 @@ def read_movements(
                 results.append(m)
                 if on_progress:
                     on_progress(1)
-    trials = [r if isinstance(r, Trial) else None for r in results]
-    errors = [f"skipped {r}" for r in results if isinstance(r, str)]
+    for _, said in results:
+        for message in said:
+            warnings.warn(message, stacklevel=2)
+    trials = [r if isinstance(r, Trial) else None for r, _ in results]
+    errors = [f"skipped {r}" for r, _ in results if isinstance(r, str)]
     return trials, errors
 
 
