@@ -87,6 +87,11 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         How ``c`` is tuned: scaled to the corpus' movement speed, with lower thresholds for
         slow trials (default; :func:`visprim.segment.seg2.robust_seg2_thresholds`), or the
         paper's rule, every trial yields at least its ``repetitions`` segments.
+    seg2_boundary : {"slowest", "first_stop"}
+        Where SEG-2 cuts after a movement run (:mod:`visprim.segment.seg2`): at the slowest
+        frame of the rest before the next run, or at the run's first stop (first local
+        minimum of ``z``, or rest), the same point whether or not another run follows, so
+        that the online segmenter can close every segment as soon as it stops.
     features : {"directions", "zyz"}
         What the segmentation and the vectors use (:mod:`visprim.features`): unit upper-arm
         and forearm directions, 6 channels per arm (default), or the paper's Z-Y-Z Euler
@@ -192,6 +197,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         seg1_adaptive: bool = _DEFAULTS["seg1_adaptive"],
         seg2_threshold: float | None = _DEFAULTS["seg2_threshold"],
         seg2_tuning: str = _DEFAULTS["seg2_tuning"],
+        seg2_boundary: str = _DEFAULTS["seg2_boundary"],
         features: str = _DEFAULTS["features"],
         offsets: str = _DEFAULTS["offsets"],
         amplitude: bool = _DEFAULTS["amplitude"],
@@ -211,6 +217,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         self.seg1_adaptive = seg1_adaptive
         self.seg2_threshold = seg2_threshold
         self.seg2_tuning = seg2_tuning
+        self.seg2_boundary = seg2_boundary
         self.features = features
         self.offsets = offsets
         self.amplitude = amplitude
@@ -294,6 +301,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
             window=float(self.window),
             seg2_threshold=threshold,
             seg2_tuning=str(self.seg2_tuning),
+            seg2_boundary=str(self.seg2_boundary),
             features=str(self.features),
             seg1_adaptive=bool(self.seg1_adaptive),
         )

@@ -229,6 +229,8 @@ class OnlineSegmenter:
         self.c = float(c)
         self.threshold = threshold
         self.robust = str(model.seg2_tuning) == "robust"
+        #: The model's SEG-2 boundary rule: "first_stop" closes each segment at its stop.
+        self.first_stop = str(getattr(model, "seg2_boundary", "slowest")) == "first_stop"
         self.rest_timeout = float(rest_timeout)
         self.max_segment = float(max_segment)
         self.speed_window = float(speed_window)
@@ -264,6 +266,7 @@ class OnlineSegmenter:
         self._run_sig = False
         self._run_confirmed = False
         self._run_min = (math.inf, -1)
+        self._run_end = -1
         # movement
         self.movement = -1
         self._open = False
@@ -271,6 +274,7 @@ class OnlineSegmenter:
         self._n_seg = 0
         self._gap_min = (math.inf, -1)
         self._offset = -1
+        self._seeking = False  #: first_stop: a significant run ended, its stop not yet seen
         self._last_run_end_t = float("nan")
         self._last_stop = 0
         self._movement_start = float("nan")
@@ -468,10 +472,16 @@ class OnlineSegmenter:
         local_min_back = f == 0 or (self._prev_z >= z)
         self._prev_speed, self._prev_t = speed, t
         prev_z, self._prev_z = self._prev_z, z
-        stop = self._is_stop(z, c) or z <= _STILL * c
+        at_rest = self._is_stop(z, c) or z <= _STILL * c
+        stop = at_rest
         if not self.robust:
             stop = stop or local_min_back
         if z >= c:
+            if self._seeking:
+                # first_stop: a run began before the last one's stop was seen (only when the
+                # adaptive c moved): the boundary at the slowest frame since, before this run.
+                self._seeking = False
+                self._close_at_stop(self._gap_min[1], f, emitted, out)
             if not self._in_run:
                 self._in_run = True
                 self._run_start = f
@@ -489,6 +499,7 @@ class OnlineSegmenter:
                     self._significant(f, t, emitted, out)
             elif (
                 self._open
+                and not self.first_stop
                 and not self._run_sig
                 and not self._run_confirmed
                 and self.confirm_frames is not None
@@ -502,19 +513,33 @@ class OnlineSegmenter:
         else:
             if self._in_run:
                 self._in_run = False
+                self._run_end = f - 1
                 if self._run_sig or self._run_confirmed:
                     # A significant run ended: the gap starts here.
                     self._gap_min = (math.inf, -1)
                     self._offset = -1
                     self._last_run_end_t = t
+                    self._seeking = self.first_stop and self._open
                 elif self._open:
                     if self._run_min[0] < self._gap_min[0]:
                         self._gap_min = self._run_min
             if self._open and z < self._gap_min[0]:
                 self._gap_min = (z, f)
+            if self._seeking:
+                # first_stop: the run's first stop, a local minimum of z (frame f - 1, its
+                # successor f not lower) or rest (frame f), whichever comes first.
+                if f - 1 > self._run_end and z >= prev_z:
+                    b = f - 1
+                elif at_rest:
+                    b = f
+                else:
+                    b = -1
+                if b >= 0:
+                    self._seeking = False
+                    self._close_at_stop(b, f, emitted, out)
             # The movement's offset if no run follows: the first stop after the last run
             # (robust: at rest; by repetitions: the first local minimum of z).
-            if self._open and self._offset < 0:
+            if self._open and self._offset < 0 and not self.first_stop:
                 if self.robust and stop:
                     self._offset = f
                 elif not self.robust and (z <= _STILL * c):
@@ -548,11 +573,24 @@ class OnlineSegmenter:
             self._boundary = max(self._last_stop, self._ring.start, f - self._max_frames + 2)
             self._movement_start = self._movement_time(self._boundary)
             return
+        if self.first_stop:
+            return  # the segment was closed at the last run's stop
         b = self._gap_min[1]
         if b < 0 or b <= self._boundary:
             return
         out.append(self._close(self._boundary, b, emitted, forced=False, upto=f + 2))
         self._boundary = b
+
+    def _close_at_stop(
+        self, b: int, f: int, emitted: float, out: list[SegmentClosed | MovementEnded]
+    ) -> None:
+        """first_stop: close the segment in progress at frame ``b`` (the last run's stop),
+        decided at frame ``f``; ``b`` is also the movement's offset if no run follows."""
+        if b > self._boundary:
+            out.append(self._close(self._boundary, b, emitted, forced=False, upto=f + 2))
+            self._boundary = b
+        self._offset = max(b, self._boundary)
+        self._gap_min = (math.inf, -1)
 
     def _end_movement(
         self, f: int, *, final: bool, emitted: float | None = None
