@@ -28,9 +28,17 @@ Stages, each causal, frame by frame (chunks of any size give the same segments):
    by repetitions). ``threshold="adaptive"`` lowers ``c`` for slow movers as the robust
    tuning does per trial, from the 95th percentile of ``z`` over the last
    ``speed_window`` seconds instead of the whole trial.
+
+   Models with ``seg2_boundary="first_stop"`` cut after every significant run at its
+   first stop, as offline (:mod:`visprim.segment.seg2`): the first frame after the run
+   that is a local minimum of ``z`` (known one frame later, when its successor is not
+   lower) or at rest (robust tuning), whichever comes first. The segment is closed there
+   at once, whether or not another run follows; ``confirm_frames`` plays no part (a run
+   counts as a movement once its travel passes ``min_travel_deg``, as offline).
 5. A movement **ends** when no significant run has begun ``rest_timeout`` seconds after the
    last one ended and its offset has been found (or when the stream ends): its last
-   segment is closed at the offset.
+   segment is closed at the offset (``"first_stop"``: it was closed at its stop already;
+   the movement's end only waits for the timeout).
 
 Each closed segment is resampled like a training segment
 (:func:`visprim.vectors.vectors_from_frames`), projected and assigned its nearest primitive
@@ -46,7 +54,9 @@ Latency (stream time from a segment's last frame to its event): the low-pass' gr
 + one frame (velocity) + the time from the slowest point of the gap until the next run
 has lasted ``confirm_frames`` frames above ``c`` (inner boundaries: the gap's slowest
 point is only known once the arm speeds up again, so a long pause costs its second half)
-or ``rest_timeout`` (a movement's last segment). Memory: ring buffers of
+or ``rest_timeout`` (a movement's last segment). With ``"first_stop"`` it is bounded: the
+group delay (rounded, 2 frames at order 2) + the frame after the stop + its successor,
+4 frames (136 ms at 34 ms frames) for every segment not cut by ``max_segment``. Memory: ring buffers of
 ``max_segment`` seconds of frames (a longer segment is cut there, ``forced=True``) and of
 ``speed_window`` seconds of ``z``, allocated once.
 """
@@ -478,10 +488,10 @@ class OnlineSegmenter:
             stop = stop or local_min_back
         if z >= c:
             if self._seeking:
-                # first_stop: a run began before the last one's stop was seen (only when the
-                # adaptive c moved): the boundary at the slowest frame since, before this run.
+                # first_stop: the frame before a new run is a local minimum (z rose to c),
+                # the last one's stop if none came before it.
                 self._seeking = False
-                self._close_at_stop(self._gap_min[1], f, emitted, out)
+                self._close_at_stop(f - 1, f, emitted, out)
             if not self._in_run:
                 self._in_run = True
                 self._run_start = f
