@@ -14,7 +14,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
+from _harness import commit, cpu_model  # noqa: E402
 from test_params import CALIBRATED, PAPER_TABLE3, _args  # noqa: E402
+from visprim import kernels  # noqa: E402
 from visprim.cli import common  # noqa: E402
 from visprim.cli.demo import paper_models  # noqa: E402
 from visprim.params import SEG2_BOUNDARIES  # noqa: E402
@@ -22,6 +24,15 @@ from visprim.report.paper import total_error_by_k  # noqa: E402
 
 
 def main() -> int:
+    import os
+    from datetime import UTC, datetime
+
+    load = " / ".join(f"{v:.1f}" for v in os.getloadavg())
+    print(
+        f"# Table 3 by SEG-2 boundary rule — {datetime.now(UTC):%Y-%m-%d %H:%M UTC}, commit "
+        f"{commit()}, {cpu_model()}, instruction set {kernels.instruction_set()}, load "
+        f"{load} (deterministic figures)\n"
+    )
     print("| rule | method | k | ours (deg) | paper (deg) | ratio |")
     print("|---|---|---:|---:|---:|---:|")
     for rule in SEG2_BOUNDARIES:
