@@ -33,8 +33,10 @@ Stages, each causal, frame by frame (chunks of any size give the same segments):
    first stop, as offline (:mod:`visprim.segment.seg2`): the first frame after the run
    that is a local minimum of ``z`` (known one frame later, when its successor is not
    lower) or at rest (robust tuning), whichever comes first. The segment is closed there
-   at once, whether or not another run follows; ``confirm_frames`` plays no part (a run
-   counts as a movement once its travel passes ``min_travel_deg``, as offline).
+   at once, whether or not another run follows. A run makes a boundary once its travel
+   passes ``min_travel_deg``, as offline; one that lasts ``confirm_frames`` frames above
+   ``c`` without that travel only postpones the movement's end (stage 5) as a
+   significant run does.
 5. A movement **ends** when no significant run has begun ``rest_timeout`` seconds after the
    last one ended and its offset has been found (or when the stream ends): its last
    segment is closed at the offset (``"first_stop"``: it was closed at its stop already;
@@ -505,11 +507,10 @@ class OnlineSegmenter:
                     self._run_min = (z, f)
             if not self._run_sig and self._run_travel > self.min_travel:
                 self._run_sig = True
-                if not self._run_confirmed:
+                if not self._run_confirmed or self.first_stop:
                     self._significant(f, t, emitted, out)
             elif (
                 self._open
-                and not self.first_stop
                 and not self._run_sig
                 and not self._run_confirmed
                 and self.confirm_frames is not None
@@ -517,20 +518,25 @@ class OnlineSegmenter:
             ):
                 # Early confirmation: the run has lasted confirm_frames frames above c; the
                 # boundary at the slowest point of the gap is emitted now, and the run
-                # counts as a movement whatever its travel.
+                # counts as a movement whatever its travel (first_stop: it only keeps the
+                # movement going, no boundary).
                 self._run_confirmed = True
-                self._significant(f, t, emitted, out)
+                if not self.first_stop:
+                    self._significant(f, t, emitted, out)
         else:
             if self._in_run:
                 self._in_run = False
                 self._run_end = f - 1
-                if self._run_sig or self._run_confirmed:
+                if self._run_sig or (self._run_confirmed and not self.first_stop):
                     # A significant run ended: the gap starts here.
                     self._gap_min = (math.inf, -1)
                     self._offset = -1
                     self._last_run_end_t = t
                     self._seeking = self.first_stop and self._open
                 elif self._open:
+                    if self._run_confirmed:
+                        # first_stop: a short run above c postpones the movement's end.
+                        self._last_run_end_t = t
                     if self._run_min[0] < self._gap_min[0]:
                         self._gap_min = self._run_min
             if self._open and z < self._gap_min[0]:
