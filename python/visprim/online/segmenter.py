@@ -58,9 +58,9 @@ has lasted ``confirm_frames`` frames above ``c`` (inner boundaries: the gap's sl
 point is only known once the arm speeds up again, so a long pause costs its second half)
 or ``rest_timeout`` (a movement's last segment). With ``"first_stop"`` it is bounded: the
 group delay (rounded, 2 frames at order 2) + the frame after the stop + its successor,
-4 frames (136 ms at 34 ms frames) for every segment not cut by ``max_segment``. Memory:
-ring buffers of ``max_segment`` seconds of frames (a longer segment is cut there,
-``forced=True``) and of ``speed_window`` seconds of ``z``, allocated once.
+4 frames (136 ms at 34 ms frames) for every segment not cut by ``max_segment``. Memory: ring buffers of
+``max_segment`` seconds of frames (a longer segment is cut there, ``forced=True``) and of
+``speed_window`` seconds of ``z``, allocated once.
 """
 
 from __future__ import annotations
@@ -82,7 +82,6 @@ from visprim.online.ring import FrameRing
 from visprim.params import ONLINE_OPTIONS
 from visprim.segment.seg2 import (
     _STILL,
-    FIRST_STOP_DIP,
     ROBUST_FRACTION,
     ROBUST_REST,
     ROBUST_SLOWEST,
@@ -490,6 +489,11 @@ class OnlineSegmenter:
         if not self.robust:
             stop = stop or local_min_back
         if z >= c:
+            if self._seeking:
+                # first_stop: the frame before a new run is a local minimum (z rose to c),
+                # the last one's stop if none came before it.
+                self._seeking = False
+                self._close_at_stop(f - 1, f, emitted, out)
             if not self._in_run:
                 self._in_run = True
                 self._run_start = f
@@ -503,11 +507,6 @@ class OnlineSegmenter:
                     self._run_min = (z, f)
             if not self._run_sig and self._run_travel > self.min_travel:
                 self._run_sig = True
-                if self._seeking:
-                    # first_stop: no stop since the last significant run (robust: no local
-                    # minimum low enough, no rest): the boundary at this run's first frame.
-                    self._seeking = False
-                    self._close_at_stop(self._run_start, f, emitted, out)
                 if not self._run_confirmed or self.first_stop:
                     self._significant(f, t, emitted, out)
             elif (
@@ -545,8 +544,7 @@ class OnlineSegmenter:
             if self._seeking:
                 # first_stop: the run's first stop, a local minimum of z (frame f - 1, its
                 # successor f not lower) or rest (frame f), whichever comes first.
-                low = not self.robust or prev_z <= FIRST_STOP_DIP * c
-                if f - 1 > self._run_end and z >= prev_z and low:
+                if f - 1 > self._run_end and z >= prev_z:
                     b = f - 1
                 elif at_rest:
                     b = f

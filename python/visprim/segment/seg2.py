@@ -116,9 +116,6 @@ _ROBUST_QUANTILE = 0.95
 ROBUST_REST: float = 1.0 / 25.0
 #: Names of the threshold tunings (:func:`tune_seg2_threshold_concatenated`).
 TUNINGS = params.TUNINGS
-#: First-stop rule with a rest level (robust tuning): a local minimum of z stops a run only
-#: at or below this fraction of c (a hesitation above it does not).
-FIRST_STOP_DIP: float = 1.0 / 5.0
 #: Names of the boundary rules (module docstring, rule 2).
 BOUNDARIES = params.SEG2_BOUNDARIES
 
@@ -232,10 +229,7 @@ def _boundaries(
     if boundary == "first_stop":
         # After every run its first stop: a local minimum of z or, with a rest level, rest.
         stop_any = stop_fwd.copy()
-        dip = z[:-1] <= (
-            np.inf if rest is None else FIRST_STOP_DIP * (c if np.ndim(c) == 0 else c[:-1])
-        )
-        stop_any[:-1] |= (z[1:] >= z[:-1]) & dip
+        stop_any[:-1] |= z[1:] >= z[:-1]
         first_stop = np.minimum.accumulate(np.where(stop_any, idx, n)[::-1])[::-1][e]
         # Never past the next run's start (it cannot be, with one c per trial).
         first_stop[:-1] = np.where(
