@@ -286,7 +286,7 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     _P(
         "seg2_boundary",
-        "slowest",
+        "first_stop",
         options(SEG2_BOUNDARIES),
         "where SEG-2 cuts after a movement run: the slowest frame of the rest before the "
         "next run, or the run's first stop (first local minimum of the squared speed, or "
@@ -294,6 +294,7 @@ PARAMETERS: tuple[Parameter, ...] = (
         "--seg2-boundary",
         "where SEG-2 cuts after a run: the slowest frame of the following rest, or the "
         "run's first stop (lets the online segmenter close each segment at once)",
+        paper="slowest",
         choices=SEG2_BOUNDARIES,
     ),
     _P(

@@ -58,9 +58,9 @@ has lasted ``confirm_frames`` frames above ``c`` (inner boundaries: the gap's sl
 point is only known once the arm speeds up again, so a long pause costs its second half)
 or ``rest_timeout`` (a movement's last segment). With ``"first_stop"`` it is bounded: the
 group delay (rounded, 2 frames at order 2) + the frame after the stop + its successor,
-4 frames (136 ms at 34 ms frames) for every segment not cut by ``max_segment``. Memory: ring buffers of
-``max_segment`` seconds of frames (a longer segment is cut there, ``forced=True``) and of
-``speed_window`` seconds of ``z``, allocated once.
+4 frames (136 ms at 34 ms frames) for every segment not cut by ``max_segment``. Memory:
+ring buffers of ``max_segment`` seconds of frames (a longer segment is cut there,
+``forced=True``) and of ``speed_window`` seconds of ``z``, allocated once.
 """
 
 from __future__ import annotations
