@@ -2,6 +2,7 @@
 
     PYTHONPATH=python python benches/bench_online.py [--data ../shared/data]
         [--out benches/bench_online.result.md] [--runs 3] [--hours 1] [--quick]
+        [--option NAME=VALUE (segmenter)] [--model-option NAME=VALUE (PrimitiveModel)]
 
 Measures, and writes a stamped table (date, commit, CPU, instruction set, load average) to
 ``--out`` (and the figures as JSON beside it):
