@@ -2,6 +2,7 @@
 
     PYTHONPATH=python python benches/bench_online.py [--data ../shared/data]
         [--out benches/bench_online.result.md] [--runs 3] [--hours 1] [--quick]
+        [--option NAME=VALUE (segmenter)] [--model-option NAME=VALUE (PrimitiveModel)]
 
 Measures, and writes a stamped table (date, commit, CPU, instruction set, load average) to
 ``--out`` (and the figures as JSON beside it):
@@ -60,6 +61,8 @@ PERIOD = 0.034
 CHUNKS = (1, 8, 64, 1024)
 #: Chunk of the fidelity replays (the events do not depend on it; tests/test_online.py).
 FIDELITY_CHUNK = 32
+#: PrimitiveModel parameters of every fitted model (``--model-option``).
+MODEL_PARAMS: dict[str, Any] = {}
 
 
 def _rss() -> int:
@@ -105,8 +108,10 @@ def fidelity(data: Path, quick: bool, **options: Any) -> tuple[dict[str, Any], l
         for k, (group, train, test) in enumerate(folds):
             t0 = time.perf_counter()
             tr = [b.movements[i] for i in train]
-            model = PrimitiveModel().fit(tr)
-            clf = MotionClassifier().fit(tr, b.labels[train], b.groups[train])
+            model = PrimitiveModel(**MODEL_PARAMS).fit(tr)
+            clf = MotionClassifier(model_params=MODEL_PARAMS).fit(
+                tr, b.labels[train], b.groups[train]
+            )
             for i in test:
                 results.append(
                     compare_trial(model, b.movements[i], clf, chunk=FIDELITY_CHUNK, **options)
@@ -127,7 +132,7 @@ def fidelity(data: Path, quick: bool, **options: Any) -> tuple[dict[str, Any], l
             notes.append(f"{path.name}: left out ({str(exc).split(';')[0]})")
     if rest and benches:
         train_all = [t for b in benches for t in b.movements]
-        model = PrimitiveModel().fit(train_all)
+        model = PrimitiveModel(**MODEL_PARAMS).fit(train_all)
         if quick:
             rest = rest[:5]
         per["other recordings (segments only)"] = [
@@ -359,6 +364,18 @@ def _memory_lines(mem: Any) -> list[str]:
     ]
 
 
+def _name_values(items: list[str]) -> dict[str, Any]:
+    """``NAME=VALUE`` items as a dict (values read as JSON when they are, else strings)."""
+    out: dict[str, Any] = {}
+    for item in items:
+        name, _, value = item.partition("=")
+        try:
+            out[name] = json.loads(value)
+        except json.JSONDecodeError:
+            out[name] = value
+    return out
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data", type=Path, default=Path("../shared/data"))
@@ -378,14 +395,17 @@ def main(argv: list[str] | None = None) -> int:
         help="an OnlineSegmenter option for the fidelity replays (e.g. filter_order=4, "
         "threshold=fixed, segment_filter=causal); repeatable",
     )
+    ap.add_argument(
+        "--model-option",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="a PrimitiveModel parameter of the fitted models and of the classifiers' models "
+        "(e.g. seg2_boundary=first_stop); repeatable",
+    )
     args = ap.parse_args(argv)
-    options: dict[str, Any] = {}
-    for item in args.option:
-        name, _, value = item.partition("=")
-        try:
-            options[name] = json.loads(value)
-        except json.JSONDecodeError:
-            options[name] = value
+    options = _name_values(args.option)
+    MODEL_PARAMS.update(_name_values(args.model_option))
     if not args.data.is_dir():
         print(f"bench_online: {args.data}: no such folder (the shared recordings)", file=sys.stderr)
         return 2
@@ -400,7 +420,7 @@ def main(argv: list[str] | None = None) -> int:
         "python": sys.version.split()[0],
         "load_start": " / ".join(f"{v:.1f}" for v in load0),
         "command": "python benches/bench_online.py " + " ".join(argv or sys.argv[1:]),
-        "options": ", ".join(args.option) or "defaults",
+        "options": ", ".join(args.option + args.model_option) or "defaults",
     }
     fid, notes = ({}, []) if "fidelity" in skip else fidelity(args.data, args.quick, **options)
     thr_rows: list[dict[str, Any]] = []

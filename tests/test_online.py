@@ -260,8 +260,13 @@ def test_evaluate_online_writes_the_early_recognition_curve(
     assert result["closed_end_accuracy"] > 0.5
 
 
-def test_early_confirmation_emits_inner_boundaries_sooner(fitted) -> None:
-    model, _, test = fitted
+def test_early_confirmation_emits_inner_boundaries_sooner(fitted, hdm05) -> None:
+    # confirm_frames decides when the slowest frame of a gap is emitted (that rule only).
+    _, _, test = fitted
+    train = [t for t in hdm05 if not t.name.startswith("HDM_mm")]
+    model = PrimitiveModel(n_components=8, n_clusters=8, n_init=2, seg2_boundary="slowest").fit(
+        train
+    )
     early: list[float] = []
     late: list[float] = []
     for t in test:

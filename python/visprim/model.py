@@ -87,6 +87,12 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         How ``c`` is tuned: scaled to the corpus' movement speed, with lower thresholds for
         slow trials (default; :func:`visprim.segment.seg2.robust_seg2_thresholds`), or the
         paper's rule, every trial yields at least its ``repetitions`` segments.
+    seg2_boundary : {"first_stop", "slowest"}
+        Where SEG-2 cuts after a movement run (:mod:`visprim.segment.seg2`): at the run's
+        first stop (first local minimum of ``z``, or rest), the same point whether or not
+        another run follows, so that the online segmenter can close every segment as soon
+        as it stops (default; docs/online.rst for the measurements), or at the slowest frame
+        of the rest before the next run (the paper's preset).
     features : {"directions", "zyz"}
         What the segmentation and the vectors use (:mod:`visprim.features`): unit upper-arm
         and forearm directions, 6 channels per arm (default), or the paper's Z-Y-Z Euler
@@ -192,6 +198,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         seg1_adaptive: bool = _DEFAULTS["seg1_adaptive"],
         seg2_threshold: float | None = _DEFAULTS["seg2_threshold"],
         seg2_tuning: str = _DEFAULTS["seg2_tuning"],
+        seg2_boundary: str = _DEFAULTS["seg2_boundary"],
         features: str = _DEFAULTS["features"],
         offsets: str = _DEFAULTS["offsets"],
         amplitude: bool = _DEFAULTS["amplitude"],
@@ -211,6 +218,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         self.seg1_adaptive = seg1_adaptive
         self.seg2_threshold = seg2_threshold
         self.seg2_tuning = seg2_tuning
+        self.seg2_boundary = seg2_boundary
         self.features = features
         self.offsets = offsets
         self.amplitude = amplitude
@@ -294,6 +302,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
             window=float(self.window),
             seg2_threshold=threshold,
             seg2_tuning=str(self.seg2_tuning),
+            seg2_boundary=str(self.seg2_boundary),
             features=str(self.features),
             seg1_adaptive=bool(self.seg1_adaptive),
         )
@@ -772,8 +781,9 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         contents = load_model(path)
         a, fitted = contents.arrays, contents.fitted
         try:
-            # Files written before the ``offsets`` parameter hold absolute vectors.
-            model = cls(**{"offsets": "turns", **contents.parameters})
+            # Files written before the ``offsets`` parameter hold absolute vectors, those
+            # written before ``seg2_boundary`` were cut at the slowest frame of each gap.
+            model = cls(**{"offsets": "turns", "seg2_boundary": "slowest", **contents.parameters})
             model._validate_params()
             tables = contents.error_tables
             model.error_tables_ = ErrorTables.from_dict(tables) if tables else None

@@ -37,6 +37,7 @@ __all__ = [
     "PAPER",
     "PARAMETERS",
     "RATE_OPTIONS",
+    "SEG2_BOUNDARIES",
     "SEGMENTATIONS",
     "SHORT_POLICIES",
     "SHORT_POLICY",
@@ -72,6 +73,10 @@ FEATURES: tuple[str, ...] = ("zyz", "directions")
 OFFSETS: tuple[str, ...] = ("turns", "mean")
 #: How SEG-2's constant is tuned (:mod:`visprim.segment.seg2`).
 TUNINGS: tuple[str, ...] = ("repetitions", "robust")
+#: Where SEG-2 puts the boundary after a movement run (:mod:`visprim.segment.seg2`): at the
+#: slowest frame of the rest before the next run ("slowest"), or at the run's first stop,
+#: the same point whether or not another run follows ("first_stop").
+SEG2_BOUNDARIES: tuple[str, ...] = ("slowest", "first_stop")
 
 
 # ---------------------------------------------------------------------------- constraints
@@ -278,6 +283,19 @@ PARAMETERS: tuple[Parameter, ...] = (
         "how SEG-2's c is tuned: to the corpus' speed or the paper's rule from the repetitions",
         paper="repetitions",
         choices=("robust", "repetitions"),
+    ),
+    _P(
+        "seg2_boundary",
+        "first_stop",
+        options(SEG2_BOUNDARIES),
+        "where SEG-2 cuts after a movement run: the slowest frame of the rest before the "
+        "next run, or the run's first stop (first local minimum of the squared speed, or "
+        "rest), the same whether or not another run follows",
+        "--seg2-boundary",
+        "where SEG-2 cuts after a run: the slowest frame of the following rest, or the "
+        "run's first stop (lets the online segmenter close each segment at once)",
+        paper="slowest",
+        choices=SEG2_BOUNDARIES,
     ),
     _P(
         "features",

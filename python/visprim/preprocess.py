@@ -104,6 +104,7 @@ def prepare_corpus(
     seg2_threshold: float | None,
     seg2_tuning: str,
     features: str,
+    seg2_boundary: str,
     seg1_adaptive: bool,
 ) -> PreparedCorpus:
     """IK, zero-phase low-pass and segmentation of ``trials`` (see the module docstring).
@@ -142,6 +143,7 @@ def prepare_corpus(
         repetitions=np.array([t.repetitions for t in trials], dtype=np.int64),
         threshold=seg2_threshold,
         tuning=seg2_tuning,
+        boundary=seg2_boundary,
         seg1_adaptive=seg1_adaptive,
         window=window,
         min_change_deg=zvc_threshold_deg,

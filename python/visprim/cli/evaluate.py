@@ -7,10 +7,12 @@ import sys
 from typing import Any
 
 from visprim.cli import common
-from visprim.params import CLASSIFIER_PARAMETERS, RATE_OPTIONS
+from visprim.params import CLASSIFIER_PARAMETERS, PARAMETERS, RATE_OPTIONS
 
 #: The classifier's settings by name (their defaults are the options' defaults).
 _CLF = {p.name: p for p in CLASSIFIER_PARAMETERS}
+#: The model's SEG-2 boundary rule, which the benchmark can compare (declared in params).
+_BOUNDARY = next(p for p in PARAMETERS if p.name == "seg2_boundary")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -26,7 +28,12 @@ def run(args: argparse.Namespace) -> int:
     found = _benchmarks(
         evaluate,
         args,
-        classifier=MotionClassifier(method=args.method, band=args.band, step=args.step),
+        classifier=MotionClassifier(
+            method=args.method,
+            band=args.band,
+            step=args.step,
+            model_params={"seg2_boundary": args.seg2_boundary},
+        ),
         reconstruction=args.reconstruction,
     )
     if found is None:
@@ -148,6 +155,12 @@ def register(sub: Any) -> None:
         type=int,
         default=_CLF["step"].default,
         help=f"per-frame descriptions at every STEP-th frame (default {_CLF['step'].default})",
+    )
+    p.add_argument(
+        _BOUNDARY.option or "--seg2-boundary",
+        choices=_BOUNDARY.choices,
+        default=_BOUNDARY.default,
+        help=f"{_BOUNDARY.help} (default {_BOUNDARY.default})",
     )
     p.add_argument(
         "--arm",

@@ -28,9 +28,19 @@ Stages, each causal, frame by frame (chunks of any size give the same segments):
    by repetitions). ``threshold="adaptive"`` lowers ``c`` for slow movers as the robust
    tuning does per trial, from the 95th percentile of ``z`` over the last
    ``speed_window`` seconds instead of the whole trial.
+
+   Models with ``seg2_boundary="first_stop"`` cut after every significant run at its
+   first stop, as offline (:mod:`visprim.segment.seg2`): the first frame after the run
+   that is a local minimum of ``z`` (known one frame later, when its successor is not
+   lower) or at rest (robust tuning), whichever comes first. The segment is closed there
+   at once, whether or not another run follows. A run makes a boundary once its travel
+   passes ``min_travel_deg``, as offline; one that lasts ``confirm_frames`` frames above
+   ``c`` without that travel only postpones the movement's end (stage 5) as a
+   significant run does.
 5. A movement **ends** when no significant run has begun ``rest_timeout`` seconds after the
    last one ended and its offset has been found (or when the stream ends): its last
-   segment is closed at the offset.
+   segment is closed at the offset (``"first_stop"``: it was closed at its stop already;
+   the movement's end only waits for the timeout).
 
 Each closed segment is resampled like a training segment
 (:func:`visprim.vectors.vectors_from_frames`), projected and assigned its nearest primitive
@@ -46,9 +56,11 @@ Latency (stream time from a segment's last frame to its event): the low-pass' gr
 + one frame (velocity) + the time from the slowest point of the gap until the next run
 has lasted ``confirm_frames`` frames above ``c`` (inner boundaries: the gap's slowest
 point is only known once the arm speeds up again, so a long pause costs its second half)
-or ``rest_timeout`` (a movement's last segment). Memory: ring buffers of
-``max_segment`` seconds of frames (a longer segment is cut there, ``forced=True``) and of
-``speed_window`` seconds of ``z``, allocated once.
+or ``rest_timeout`` (a movement's last segment). With ``"first_stop"`` it is bounded: the
+group delay (rounded, 2 frames at order 2) + the frame after the stop + its successor,
+4 frames (136 ms at 34 ms frames) for every segment not cut by ``max_segment``. Memory:
+ring buffers of ``max_segment`` seconds of frames (a longer segment is cut there,
+``forced=True``) and of ``speed_window`` seconds of ``z``, allocated once.
 """
 
 from __future__ import annotations
@@ -229,6 +241,8 @@ class OnlineSegmenter:
         self.c = float(c)
         self.threshold = threshold
         self.robust = str(model.seg2_tuning) == "robust"
+        #: The model's SEG-2 boundary rule: "first_stop" closes each segment at its stop.
+        self.first_stop = str(getattr(model, "seg2_boundary", "slowest")) == "first_stop"
         self.rest_timeout = float(rest_timeout)
         self.max_segment = float(max_segment)
         self.speed_window = float(speed_window)
@@ -264,6 +278,7 @@ class OnlineSegmenter:
         self._run_sig = False
         self._run_confirmed = False
         self._run_min = (math.inf, -1)
+        self._run_end = -1
         # movement
         self.movement = -1
         self._open = False
@@ -271,6 +286,7 @@ class OnlineSegmenter:
         self._n_seg = 0
         self._gap_min = (math.inf, -1)
         self._offset = -1
+        self._seeking = False  #: first_stop: a significant run ended, its stop not yet seen
         self._last_run_end_t = float("nan")
         self._last_stop = 0
         self._movement_start = float("nan")
@@ -468,10 +484,16 @@ class OnlineSegmenter:
         local_min_back = f == 0 or (self._prev_z >= z)
         self._prev_speed, self._prev_t = speed, t
         prev_z, self._prev_z = self._prev_z, z
-        stop = self._is_stop(z, c) or z <= _STILL * c
+        at_rest = self._is_stop(z, c) or z <= _STILL * c
+        stop = at_rest
         if not self.robust:
             stop = stop or local_min_back
         if z >= c:
+            if self._seeking:
+                # first_stop: the frame before a new run is a local minimum (z rose to c),
+                # the last one's stop if none came before it.
+                self._seeking = False
+                self._close_at_stop(f - 1, f, emitted, out)
             if not self._in_run:
                 self._in_run = True
                 self._run_start = f
@@ -485,7 +507,7 @@ class OnlineSegmenter:
                     self._run_min = (z, f)
             if not self._run_sig and self._run_travel > self.min_travel:
                 self._run_sig = True
-                if not self._run_confirmed:
+                if not self._run_confirmed or self.first_stop:
                     self._significant(f, t, emitted, out)
             elif (
                 self._open
@@ -496,25 +518,44 @@ class OnlineSegmenter:
             ):
                 # Early confirmation: the run has lasted confirm_frames frames above c; the
                 # boundary at the slowest point of the gap is emitted now, and the run
-                # counts as a movement whatever its travel.
+                # counts as a movement whatever its travel (first_stop: it only keeps the
+                # movement going, no boundary).
                 self._run_confirmed = True
-                self._significant(f, t, emitted, out)
+                if not self.first_stop:
+                    self._significant(f, t, emitted, out)
         else:
             if self._in_run:
                 self._in_run = False
-                if self._run_sig or self._run_confirmed:
+                self._run_end = f - 1
+                if self._run_sig or (self._run_confirmed and not self.first_stop):
                     # A significant run ended: the gap starts here.
                     self._gap_min = (math.inf, -1)
                     self._offset = -1
                     self._last_run_end_t = t
+                    self._seeking = self.first_stop and self._open
                 elif self._open:
+                    if self._run_confirmed:
+                        # first_stop: a short run above c postpones the movement's end.
+                        self._last_run_end_t = t
                     if self._run_min[0] < self._gap_min[0]:
                         self._gap_min = self._run_min
             if self._open and z < self._gap_min[0]:
                 self._gap_min = (z, f)
+            if self._seeking:
+                # first_stop: the run's first stop, a local minimum of z (frame f - 1, its
+                # successor f not lower) or rest (frame f), whichever comes first.
+                if f - 1 > self._run_end and z >= prev_z:
+                    b = f - 1
+                elif at_rest:
+                    b = f
+                else:
+                    b = -1
+                if b >= 0:
+                    self._seeking = False
+                    self._close_at_stop(b, f, emitted, out)
             # The movement's offset if no run follows: the first stop after the last run
             # (robust: at rest; by repetitions: the first local minimum of z).
-            if self._open and self._offset < 0:
+            if self._open and self._offset < 0 and not self.first_stop:
                 if self.robust and stop:
                     self._offset = f
                 elif not self.robust and (z <= _STILL * c):
@@ -548,11 +589,24 @@ class OnlineSegmenter:
             self._boundary = max(self._last_stop, self._ring.start, f - self._max_frames + 2)
             self._movement_start = self._movement_time(self._boundary)
             return
+        if self.first_stop:
+            return  # the segment was closed at the last run's stop
         b = self._gap_min[1]
         if b < 0 or b <= self._boundary:
             return
         out.append(self._close(self._boundary, b, emitted, forced=False, upto=f + 2))
         self._boundary = b
+
+    def _close_at_stop(
+        self, b: int, f: int, emitted: float, out: list[SegmentClosed | MovementEnded]
+    ) -> None:
+        """first_stop: close the segment in progress at frame ``b`` (the last run's stop),
+        decided at frame ``f``; ``b`` is also the movement's offset if no run follows."""
+        if b > self._boundary:
+            out.append(self._close(self._boundary, b, emitted, forced=False, upto=f + 2))
+            self._boundary = b
+        self._offset = max(b, self._boundary)
+        self._gap_min = (math.inf, -1)
 
     def _end_movement(
         self, f: int, *, final: bool, emitted: float | None = None

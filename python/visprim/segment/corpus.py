@@ -102,6 +102,7 @@ def segment_concatenated(
     method: Method,
     tuning: str,
     seg1_adaptive: bool,
+    boundary: str = params.SEG2_BOUNDARIES[0],
     repetitions: ArrayLike | int = 1,
     threshold: float | None = None,
     coverage: float = 1.0,
@@ -129,6 +130,9 @@ def segment_concatenated(
         (:func:`~visprim.segment.tune_seg2_threshold`, with ``coverage``), or scaled to the
         corpus' movement speed with per-trial thresholds for slow trials
         (:func:`~visprim.segment.seg2.robust_seg2_thresholds`).
+    boundary : "slowest" or "first_stop"
+        SEG-2 only: where the boundary after a run is (:mod:`.seg2`; default "slowest",
+        the model's is ``seg2_boundary``).
     min_travel_deg : float, degrees
         SEG-2 only: travel that makes a run of ``z ≥ c`` a movement (:mod:`.seg2`).
     window, min_change_deg, min_dofs
@@ -179,6 +183,7 @@ def segment_concatenated(
             used,
             min_travel_deg=min_travel_deg,
             rest_fraction=ROBUST_REST if tuning == "robust" else None,
+            boundary=boundary,
         )
         same = b_trial[1:] == b_trial[:-1]
         trial = b_trial[:-1][same]
@@ -209,6 +214,7 @@ def segment_corpus(
     *,
     tuning: str = params.PAPER["seg2_tuning"],
     seg1_adaptive: bool = params.PAPER["seg1_adaptive"],
+    boundary: str = params.SEG2_BOUNDARIES[0],
     repetitions: Sequence[int] | int = 1,
     threshold: float | None = None,
     coverage: float = 1.0,
@@ -231,6 +237,7 @@ def segment_corpus(
         method=method,
         tuning=tuning,
         seg1_adaptive=seg1_adaptive,
+        boundary=boundary,
         repetitions=np.asarray(repetitions, dtype=np.int64),
         threshold=threshold,
         coverage=coverage,

@@ -18,6 +18,15 @@
    * after the last significant run: the *offset*, symmetrically (first local minimum of
      ``z`` after the run).
 
+   With ``boundary="first_stop"`` (``seg2_boundary`` of the model) the boundary after
+   *every* significant run is its first stop, the same point whether or not another run
+   follows: the first frame after the run's end that is a local minimum of ``z`` (its
+   successor is not lower) or, with a ``rest`` level (the robust tuning), at rest, whichever
+   comes first (it always comes before the next run starts). The rest before the next run
+   then belongs to the next segment. The online segmenter can close every segment as soon
+   as its stop is seen (:mod:`visprim.online.segmenter`), where the slowest frame of a gap
+   is known only once the next run starts.
+
 3. Consecutive boundaries delimit the segments, so SEG-2 **partitions** the movement from
    onset to offset; with ``n`` significant runs a trial has ``n`` segments (none if it never
    moves significantly).
@@ -107,6 +116,8 @@ _ROBUST_QUANTILE = 0.95
 ROBUST_REST: float = 1.0 / 25.0
 #: Names of the threshold tunings (:func:`tune_seg2_threshold_concatenated`).
 TUNINGS = params.TUNINGS
+#: Names of the boundary rules (module docstring, rule 2).
+BOUNDARIES = params.SEG2_BOUNDARIES
 
 
 def speed_squared_concatenated(
@@ -183,9 +194,11 @@ def _boundaries(
     c: float | NDArray[np.float64],
     min_travel: float,
     rest: float | NDArray[np.float64] | None = None,
+    boundary: str = "slowest",
 ) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     """(trial, frame) of every SEG-2 boundary, sorted by trial and frame; ``rest`` (z at
-    or below which the arm is at rest) replaces the local minima as onsets and offsets."""
+    or below which the arm is at rest) replaces the local minima as onsets and offsets;
+    ``boundary`` the rule after a run (module docstring)."""
     z, n = corpus.z, corpus.z.size
     s, e = corpus.significant_runs(c, min_travel)
     if s.size == 0:
@@ -213,6 +226,19 @@ def _boundaries(
         stop_fwd |= z <= rest
     next_stop = np.minimum.accumulate(np.where(stop_fwd, idx, n)[::-1])[::-1]
     offset = next_stop[e[last_run]]
+    if boundary == "first_stop":
+        # After every run its first stop: a local minimum of z or, with a rest level, rest.
+        stop_any = stop_fwd.copy()
+        stop_any[:-1] |= z[1:] >= z[:-1]
+        first_stop = np.minimum.accumulate(np.where(stop_any, idx, n)[::-1])[::-1][e]
+        # Never past the next run's start (it cannot be, with one c per trial).
+        first_stop[:-1] = np.where(
+            last_run[:-1], first_stop[:-1], np.minimum(first_stop[:-1], s[1:])
+        )
+        frame = np.concatenate([onset, first_stop])
+        trial = corpus.trial_of[frame]
+        order = np.lexsort((frame, trial))
+        return trial[order], frame[order]
     # Between consecutive significant runs of a trial: argmin of z over the rest between.
     between = ~last_run[:-1]
     gap_start = e[:-1][between] + 1
@@ -242,6 +268,7 @@ def seg2_boundaries(
     *,
     min_travel_deg: float = DEFAULT_MIN_TRAVEL_DEG,
     rest_fraction: float | None = None,
+    boundary: str = "slowest",
 ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
     """SEG-2 boundaries of a concatenated corpus (rules in the module docstring).
 
@@ -255,6 +282,9 @@ def seg2_boundaries(
         first frame after its last) significant run where ``z ≤ rest_fraction · c``, or the
         trial's end: slow lead-ins and returns stay in the movement. Default: the nearest
         local minimum of z (the paper-faithful rule of the module docstring).
+    boundary : {"slowest", "first_stop"}
+        The boundary between two runs at the slowest frame of the rest between them, or
+        the boundary after every run at its first stop (module docstring, rule 2).
 
     Returns
     -------
@@ -272,9 +302,11 @@ def seg2_boundaries(
         c = c[corpus.trial_of]
     elif c.ndim != 0:
         raise ValueError(f"threshold must be a number or one per trial, got shape {c.shape}")
+    if boundary not in BOUNDARIES:
+        raise ValueError(f"boundary must be one of {list(BOUNDARIES)}, got {boundary!r}")
     cc = c if c.ndim else float(c)
     rest = None if rest_fraction is None else float(rest_fraction) * cc
-    trial, frame = _boundaries(corpus, cc, _min_travel(min_travel_deg), rest)
+    trial, frame = _boundaries(corpus, cc, _min_travel(min_travel_deg), rest, boundary)
     return trial, frame - corpus.offsets[trial], corpus.t[frame]
 
 
