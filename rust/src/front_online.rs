@@ -555,7 +555,10 @@ impl OnlineFrontEnd {
         let angles_len = elements::<f64>(&[k, a4], "angles")?;
         reserve(&mut out.angles, angles_len)?;
         out.angles.resize(angles_len, 0.0);
-        reserve(&mut out.directions, elements::<f64>(&[k, n_arms, 6], "directions")?)?;
+        reserve(
+            &mut out.directions,
+            elements::<f64>(&[k, n_arms, 6], "directions")?,
+        )?;
         out.directions.resize(k * n_arms * 6, 0.0);
         for arm in &mut self.arms {
             arm.resize(k)?;
@@ -681,8 +684,7 @@ impl OnlineFrontEnd {
                         let m = |i: usize, c: usize| chunk.markers[at + 3 * i + c];
                         let wrist = [m(2, 0), m(2, 1), m(2, 2)];
                         let elbow: [f64; 3] = std::array::from_fn(|c| 2.0 * m(1, c) - wrist[c]);
-                        let shoulder: [f64; 3] =
-                            std::array::from_fn(|c| 2.0 * m(0, c) - elbow[c]);
+                        let shoulder: [f64; 3] = std::array::from_fn(|c| 2.0 * m(0, c) - elbow[c]);
                         [shoulder, elbow, wrist]
                     }
                 };
@@ -697,9 +699,12 @@ impl OnlineFrontEnd {
                     fore = to_body(fore);
                 }
                 let dir = &mut out.directions[(t * n_arms + a) * 6..(t * n_arms + a) * 6 + 6];
-                for (b, (v, what)) in [(upper, "upper arm (shoulder→elbow)"), (fore, "forearm (elbow→wrist)")]
-                    .into_iter()
-                    .enumerate()
+                for (b, (v, what)) in [
+                    (upper, "upper arm (shoulder→elbow)"),
+                    (fore, "forearm (elbow→wrist)"),
+                ]
+                .into_iter()
+                .enumerate()
                 {
                     let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
                     if norm < MIN_BONE_LENGTH {
@@ -726,7 +731,8 @@ impl OnlineFrontEnd {
                 arm.gamma[t] = u[1].atan2(u[0]);
                 arm.ok[t] = arm.beta[t] > s && arm.beta[t] < PI - s;
             }
-            self.continuity.apply(&mut arm.gamma, &arm.ok, chunk.times)?;
+            self.continuity
+                .apply(&mut arm.gamma, &arm.ok, chunk.times)?;
             for t in 0..k {
                 let (g, b, f) = (arm.gamma[t], arm.beta[t], arm.f[t]);
                 let (sg, cg) = (g.sin(), g.cos());
@@ -737,7 +743,8 @@ impl OnlineFrontEnd {
                 arm.alpha[t] = y1.atan2(vx);
                 arm.ok[t] = arm.elbow[t] > s && arm.elbow[t] < PI - s;
             }
-            self.continuity.apply(&mut arm.alpha, &arm.ok, chunk.times)?;
+            self.continuity
+                .apply(&mut arm.alpha, &arm.ok, chunk.times)?;
             for t in 0..k {
                 let row = &mut out.angles[(t * n_arms + a) * 4..(t * n_arms + a) * 4 + 4];
                 row.copy_from_slice(&[arm.gamma[t], arm.beta[t], arm.alpha[t], arm.elbow[t]]);
@@ -1021,7 +1028,10 @@ mod tests {
                 .collect();
             let z: f64 = d.iter().map(|v| v * v).sum();
             let got = s[f * SPEED_COLUMNS];
-            assert!((got - z).abs() <= 1e-8 * z.max(1.0), "frame {f}: {got} vs {z}");
+            assert!(
+                (got - z).abs() <= 1e-8 * z.max(1.0),
+                "frame {f}: {got} vs {z}"
+            );
             assert_eq!(s[f * SPEED_COLUMNS + 3], 0.5); // fixed threshold
         }
     }
@@ -1070,7 +1080,8 @@ mod tests {
         // Singular frames: interpolated in time between the well-defined ones, 0 if none.
         let mut c = Continuity::default();
         let mut g = vec![0.5, 9.0, 1.5];
-        c.apply(&mut g, &[true, false, true], &[0.0, 1.0, 2.0]).unwrap();
+        c.apply(&mut g, &[true, false, true], &[0.0, 1.0, 2.0])
+            .unwrap();
         assert!((g[1] - 1.0).abs() < 1e-12);
         let mut g = vec![0.5, 9.0];
         c.apply(&mut g, &[false, false], &[0.0, 1.0]).unwrap();

@@ -115,9 +115,7 @@ class OnlinePipeline:
             if self.recogniser.describe is arm_directions:
                 self._features = seg.bone_directions
             else:
-                self._features = self.recogniser.features(frames.as_trial(seg.arms))[
-                    : len(frames)
-                ]
+                self._features = self.recogniser.features(frames.as_trial(seg.arms))[: len(frames)]
         for event in events:
             out.extend(self._on_event(event))
         if self.recogniser is not None:

@@ -334,7 +334,9 @@ class OnlineSegmenter:
             directions.append(bones)
             out.extend(self._push_block(values, times, speeds, angles))
         if directions:
-            self.bone_directions = directions[0] if len(directions) == 1 else np.concatenate(directions)
+            self.bone_directions = (
+                directions[0] if len(directions) == 1 else np.concatenate(directions)
+            )
         return out
 
     def push_values(
@@ -363,7 +365,9 @@ class OnlineSegmenter:
         if k == 0:
             return []
         if self._ring is None:
-            self._allocate(float(self._front.period))
+            period = self._front.period
+            assert period is not None  # set by the front end's first chunk
+            self._allocate(period)
         assert self._ring is not None and self._times is not None
         self._ring.extend(values)
         if self._raw is not None:

@@ -53,7 +53,11 @@ fn array<'py>(
     let arr = ndarray(obj, name, "float64")?;
     check_dtype::<f64>(arr, name, "float64")?;
     let got = arr.shape();
-    let fits = got.len() == shape.len() && got.iter().zip(shape).all(|(&g, w)| w.is_none_or(|w| g == w));
+    let fits = got.len() == shape.len()
+        && got
+            .iter()
+            .zip(shape)
+            .all(|(&g, w)| w.is_none_or(|w| g == w));
     if !fits {
         let want: Vec<String> = shape
             .iter()
@@ -68,7 +72,11 @@ fn array<'py>(
     f64_values(arr)
 }
 
-fn matrix<'py>(py: Python<'py>, values: Vec<f64>, cols: usize) -> PyResult<Bound<'py, PyArray2<f64>>> {
+fn matrix<'py>(
+    py: Python<'py>,
+    values: Vec<f64>,
+    cols: usize,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let rows = values.len().checked_div(cols).unwrap_or(0);
     let arr = Array2::from_shape_vec((rows, cols), values)
         .map_err(|e| PyValueError::new_err(format!("output: {e}")))?;
@@ -189,7 +197,11 @@ impl OnlineFrontEnd {
         values: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let t = array(times, "times", &[None])?;
-        let v = array(values, "values", &[Some(t.shape[0]), Some(self.inner.channels())])?;
+        let v = array(
+            values,
+            "values",
+            &[Some(t.shape[0]), Some(self.inner.channels())],
+        )?;
         let (tv, vv) = (t.values(), v.values());
         let mut out = Output::default();
         let inner = &mut self.inner;
