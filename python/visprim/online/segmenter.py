@@ -333,10 +333,13 @@ class OnlineSegmenter:
             )
             directions.append(bones)
             out.extend(self._push_block(values, times, speeds, angles))
-        if directions:
-            self.bone_directions = (
-                directions[0] if len(directions) == 1 else np.concatenate(directions)
-            )
+        self.bone_directions = (
+            directions[0]
+            if len(directions) == 1
+            else np.concatenate(directions)
+            if directions
+            else np.zeros((0, 6 * len(self.arms)))
+        )
         return out
 
     def push_values(
