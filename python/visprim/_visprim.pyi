@@ -1,5 +1,6 @@
 """Type stubs of the compiled extension visprim._visprim (see visprim.kernels)."""
 
+from collections.abc import Sequence
 from typing import final
 
 import numpy as np
@@ -97,6 +98,46 @@ class CausalSos:
     def reset(self) -> None: ...
     @property
     def channels(self) -> int: ...
+    @property
+    def memory_bytes(self) -> int: ...
+
+class OnlineFrontEnd:
+    def __new__(
+        cls,
+        sos: NDArray[np.float64],
+        arms: Sequence[str],
+        features: str,
+        singular_angle: float,
+        c: float,
+        adaptive: bool,
+        quantile: float,
+        fraction: float,
+        slowest: float,
+        every: int,
+        speed_window: float,
+    ) -> OnlineFrontEnd: ...
+    def push(
+        self,
+        times: NDArray[np.float64],
+        markers: NDArray[np.float64],
+        joints: NDArray[np.float64] | None = None,
+        body_frame: NDArray[np.float64] | None = None,
+    ) -> tuple[
+        NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]
+    ]: ...
+    def push_values(
+        self, times: NDArray[np.float64], values: NDArray[np.float64]
+    ) -> NDArray[np.float64]: ...
+    def finish(self) -> NDArray[np.float64]: ...
+    def reset(self) -> None: ...
+    @property
+    def channels(self) -> int: ...
+    @property
+    def n_frames(self) -> int: ...
+    @property
+    def period(self) -> float | None: ...
+    @property
+    def window_frames(self) -> int | None: ...
     @property
     def memory_bytes(self) -> int: ...
 

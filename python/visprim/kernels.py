@@ -462,6 +462,9 @@ OnlineDtw = _visprim.OnlineDtw
 #: Causal ``sosfilt`` of a multichannel stream, state kept between chunks
 #: (:mod:`visprim.online.lowpass`).
 CausalSos = _visprim.CausalSos
+#: The online segmenter's front end (inverse kinematics, causal low-pass, channels, squared
+#: speed and adaptive threshold), state kept between chunks (:mod:`visprim.online.segmenter`).
+OnlineFrontEnd = _visprim.OnlineFrontEnd
 
 
 def eigh(a: ArrayLike, *, k: int | None = None) -> tuple[_F64, _F64]:

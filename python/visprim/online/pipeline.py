@@ -35,7 +35,7 @@ from typing import Any
 
 import numpy as np
 
-from visprim.classify import DTWClassifier
+from visprim.classify import DTWClassifier, arm_directions
 from visprim.model import PrimitiveModel
 from visprim.online.events import ClassUpdate, Event, MovementEnded, SegmentClosed
 from visprim.online.movement import MovementFrames, WholeMovementClassifier
@@ -107,9 +107,16 @@ class OnlinePipeline:
         if self.whole is not None:
             self.whole.frames.extend(frames)
         if self.recogniser is not None:
-            self._features = self.recogniser.features(frames.as_trial(seg.arms))[: len(frames)]
             self._chunk_base = seg.n_frames
-        for event in seg.push(frames):
+        events = seg.push(frames)
+        if self.recogniser is not None:
+            # The classifier's per-frame description: the front end computed the bone
+            # directions already; another description goes through a Trial of the chunk.
+            if self.recogniser.describe is arm_directions:
+                self._features = seg.bone_directions
+            else:
+                self._features = self.recogniser.features(frames.as_trial(seg.arms))[: len(frames)]
+        for event in events:
             out.extend(self._on_event(event))
         if self.recogniser is not None:
             self._feed(seg.n_frames)

@@ -65,6 +65,8 @@ class OnlineRecogniser:
         self.labels = np.asarray(list(labels))
         if self.labels.shape[0] != len(refs):
             raise ValueError(f"{len(refs)} references but {self.labels.shape[0]} labels")
+        # Integer codes of the labels: confidence compares them at every push.
+        self._codes = np.unique(self.labels, return_inverse=True)[1].reshape(-1)
         self.describe = describe
 
     @classmethod
@@ -99,13 +101,13 @@ class OnlineRecogniser:
     def running(self) -> tuple[Any, float, float]:
         """``(label, confidence, cost)`` of the open-end match so far."""
         costs, _ = self.dtw.open_end()
-        best, conf = confidence(np.asarray(costs), self.labels)
+        best, conf = confidence(np.asarray(costs), self._codes)
         return self.labels[best], conf, float(costs[best])
 
     def final(self) -> tuple[Any, float, float]:
         """``(label, confidence, cost)`` of the closed-end match of the whole query."""
         costs = np.asarray(self.dtw.costs())
-        best, conf = confidence(costs, self.labels)
+        best, conf = confidence(costs, self._codes)
         return self.labels[best], conf, float(costs[best])
 
     def reset(self) -> None:

@@ -1,8 +1,10 @@
 """Online SEG-2: the segments of a stream, each closed as soon as its end is known.
 
-Stages, each causal, frame by frame (chunks of any size give the same segments):
+Stages, each causal, frame by frame (chunks of any size give the same segments). Stages
+1–3 and the adaptive threshold run in Rust (:class:`visprim.kernels.OnlineFrontEnd`), their
+state kept between chunks; SEG-2's rules (4–5) in Python, frame by frame:
 
-1. **Inverse kinematics** of each pushed frame (:func:`visprim.ik.arm_angles_corpus`). For
+1. **Inverse kinematics** of each pushed frame (:func:`visprim.ik.arm_angles_corpus`'s). For
    bone-direction models γ and α come from ``atan2`` on every frame (directions are exact
    for any γ, and offline's interpolation through the singular cones needs later frames),
    so the segments do not depend on how the stream is cut into chunks. Z-Y-Z models keep
@@ -60,7 +62,8 @@ or ``rest_timeout`` (a movement's last segment). With ``"first_stop"`` it is bou
 group delay (rounded, 2 frames at order 2) + the frame after the stop + its successor,
 4 frames (136 ms at 34 ms frames) for every segment not cut by ``max_segment``. Memory:
 ring buffers of ``max_segment`` seconds of frames (a longer segment is cut there,
-``forced=True``) and of ``speed_window`` seconds of ``z``, allocated once.
+``forced=True``) and of ``speed_window`` seconds of ``z`` (in the front end, a sorted
+window), allocated once.
 """
 
 from __future__ import annotations
@@ -72,15 +75,17 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from visprim import kernels
 from visprim.features import from_angles, periodic_channels
-from visprim.filtering import lowpass
-from visprim.ik import DEFAULT_SINGULAR_ANGLE, arm_angles_corpus
+from visprim.filtering import butterworth, lowpass
+from visprim.ik import DEFAULT_SINGULAR_ANGLE
 from visprim.model import PrimitiveModel
 from visprim.online.events import MovementEnded, SegmentClosed
-from visprim.online.lowpass import CausalLowpass
+from visprim.online.lowpass import group_delay_frames
 from visprim.online.ring import FrameRing
 from visprim.params import ONLINE_OPTIONS
 from visprim.segment.seg2 import (
+    _ROBUST_QUANTILE,
     _STILL,
     ROBUST_FRACTION,
     ROBUST_REST,
@@ -248,18 +253,37 @@ class OnlineSegmenter:
         self.speed_window = float(speed_window)
         self.min_travel = float(np.deg2rad(min_travel_deg))
         order = int(model.filter_order) if filter_order is None else int(filter_order)
-        self.lowpass = CausalLowpass(order, float(model.cutoff))
+        #: Order of the causal low-pass.
+        self.filter_order = order
         #: Frames by which the filtered angles lag the movement (the filter's group delay,
         #: rounded): segment times are reported that many frames earlier.
-        self._shift = int(round(self.lowpass.delay_frames))
-        self._periodic = periodic_channels("zyz", len(self.arms))
+        self._shift = int(round(group_delay_frames(order, float(model.cutoff))))
+        # Bone directions are exact for any γ, so the causal IK takes γ and α from atan2 on
+        # every frame (no interpolation through the singular cones, which needs later
+        # frames); Z-Y-Z models keep the interpolation within each chunk.
+        singular = 0.0 if self.features == "directions" else DEFAULT_SINGULAR_ANGLE
+        #: Stages 1–3 and the threshold (module docstring), state kept between chunks.
+        self._front = kernels.OnlineFrontEnd(
+            butterworth(order, float(model.cutoff)),
+            list(self.arms),
+            self.features,
+            singular,
+            self.c,
+            threshold == "adaptive",
+            _ROBUST_QUANTILE,
+            ROBUST_FRACTION,
+            ROBUST_SLOWEST,
+            _EVERY,
+            self.speed_window,
+        )
+        #: Unit bone directions in the torso's axes of the frames of the last push
+        #: ``(k, 6 n_arms)`` (:func:`visprim.classify.arm_directions`), from the front end.
+        self.bone_directions: NDArray[np.float64] = np.zeros((0, 6 * len(self.arms)))
         self._vector_periodic = periodic_channels(self.features, len(self.arms))
         self._n_channels = int(model.n_channels)
         self._ring: FrameRing | None = None
         self._raw: FrameRing | None = None
         self._times: FrameRing | None = None
-        self._z: FrameRing | None = None
-        self._last_angles: NDArray[np.float64] | None = None
         self._reset_state()
 
     # ------------------------------------------------------------------ state
@@ -270,7 +294,7 @@ class OnlineSegmenter:
         self._prev_speed = 0.0
         self._prev_t = float("nan")
         self._prev_z = float("nan")
-        self._ck = self.c
+        self._ck = self.c  #: the threshold of the frame being stepped (from the front end)
         # runs
         self._in_run = False
         self._run_start = -1
@@ -299,49 +323,40 @@ class OnlineSegmenter:
         if self.segment_filter == "zero_phase":
             self._raw = FrameRing(n + _BLOCK + 4 + _LEAD, 4 * len(self.arms))
         self._times = FrameRing(n + _BLOCK + 4, 1)
-        w = max(8, int(math.ceil(self.speed_window / period)))
-        self._z = FrameRing(w + _BLOCK + 4, 1)
         self._max_frames = n
-        self._window_frames = w
 
     @property
     def buffer_bytes(self) -> int:
-        """Bytes held by the ring buffers (fixed once the first chunk set them up)."""
-        rings = (self._ring, self._raw, self._times, self._z)
-        return sum(r.nbytes for r in rings if r is not None)
+        """Bytes held by the ring buffers and the front end (fixed once the first chunk set
+        them up)."""
+        rings = (self._ring, self._raw, self._times)
+        return sum(r.nbytes for r in rings if r is not None) + int(self._front.memory_bytes)
 
     # ------------------------------------------------------------------ input
-
-    def values_of(self, frames: Frames) -> NDArray[np.float64]:
-        """The model's per-frame channels of a chunk, causally low-passed (stages 1–3)."""
-        return from_angles(self.lowpass(self.angles_of(frames)), self.features)
-
-    def angles_of(self, frames: Frames) -> NDArray[np.float64]:
-        """The raw arm angles of a chunk (stage 1), continuous with the previous chunk's."""
-        single = len(frames) == 1
-        # Bone directions are exact for any γ, so the causal IK takes γ and α from atan2
-        # on every frame (no interpolation through the singular cones, which needs later
-        # frames); Z-Y-Z models keep the interpolation within each chunk.
-        singular = 0.0 if self.features == "directions" else DEFAULT_SINGULAR_ANGLE
-        angles = arm_angles_corpus([frames.as_trial(self.arms)], singular_angle=singular)[0]
-        if single:
-            angles = angles[:1]
-        angles = np.array(angles, dtype=np.float64)
-        if self._last_angles is not None and self._periodic:
-            p = list(self._periodic)
-            turns = np.round((self._last_angles[p] - angles[0, p]) / (2 * np.pi))
-            angles[:, p] += 2 * np.pi * turns
-        self._last_angles = angles[-1].copy()
-        return angles
 
     def push(self, frames: Frames) -> list[SegmentClosed | MovementEnded]:
         """Add a chunk; returns the segments closed and movements ended, in order."""
         out: list[SegmentClosed | MovementEnded] = []
-        for a in range(0, len(frames), _BLOCK):
-            part = frames.part(a, min(len(frames), a + _BLOCK))
-            angles = self.angles_of(part)
-            values = from_angles(self.lowpass(angles), self.features)
-            out.extend(self._push_block(values, part.times, angles))
+        n = len(frames)
+        directions = []
+        for a in range(0, n, _BLOCK):
+            part = frames if n <= _BLOCK else frames.part(a, min(n, a + _BLOCK))
+            times = np.asarray(part.times, dtype=np.float64)
+            angles, values, bones, speeds = self._front.push(
+                times,
+                np.asarray(part.markers, dtype=np.float64),
+                None if part.joints is None else np.asarray(part.joints, dtype=np.float64),
+                None if part.body_frame is None else np.asarray(part.body_frame, dtype=np.float64),
+            )
+            directions.append(bones)
+            out.extend(self._push_block(values, times, speeds, angles))
+        self.bone_directions = (
+            directions[0]
+            if len(directions) == 1
+            else np.concatenate(directions)
+            if directions
+            else np.zeros((0, 6 * len(self.arms)))
+        )
         return out
 
     def push_values(
@@ -349,29 +364,30 @@ class OnlineSegmenter:
     ) -> list[SegmentClosed | MovementEnded]:
         """Add already filtered per-frame channels ``(k, C)`` with their times ``(k,)``."""
         out: list[SegmentClosed | MovementEnded] = []
+        values = np.ascontiguousarray(values, dtype=np.float64)
+        times = np.ascontiguousarray(times, dtype=np.float64)
         for a in range(0, times.shape[0], _BLOCK):
             b = min(times.shape[0], a + _BLOCK)
-            out.extend(self._push_block(values[a:b], times[a:b]))
+            speeds = self._front.push_values(times[a:b], values[a:b])
+            out.extend(self._push_block(values[a:b], times[a:b], speeds))
         return out
 
     def _push_block(
         self,
         values: NDArray[np.float64],
         times: NDArray[np.float64],
+        speeds: NDArray[np.float64],
         angles: NDArray[np.float64] | None = None,
     ) -> list[SegmentClosed | MovementEnded]:
+        """Hold a block the front end has processed (its checks passed) and step SEG-2
+        through the frames whose ``z`` became known (``speeds``)."""
         k = times.shape[0]
         if k == 0:
             return []
         if self._ring is None:
-            period = float(np.median(np.diff(times))) if k > 1 else 1.0 / 30.0
-            self._allocate(period if period > 0 else 1.0 / 30.0)
-        if self.n_frames and not times[0] > self._prev_frame_time:
-            raise ValueError(
-                f"timestamps must increase: {times[0]:.6g} s follows {self._prev_frame_time:.6g} s"
-            )
-        if np.any(np.diff(times) <= 0) or not np.all(np.isfinite(times)):
-            raise ValueError("timestamps within a chunk must be finite and increasing")
+            period = self._front.period
+            assert period is not None  # set by the front end's first chunk
+            self._allocate(period)
         assert self._ring is not None and self._times is not None
         self._ring.extend(values)
         if self._raw is not None:
@@ -381,10 +397,7 @@ class OnlineSegmenter:
                 self._raw.extend(angles)
         self._times.extend(times[:, None])
         self.n_frames += k
-        self._prev_frame_time = float(times[-1])
-        return self._process(self.n_frames - 1, final=False)
-
-    _prev_frame_time = -math.inf
+        return self._process(speeds)
 
     def flush(self) -> list[SegmentClosed | MovementEnded]:
         """End of the stream: the last frame's velocity by a backward difference, and the
@@ -392,87 +405,39 @@ class OnlineSegmenter:
         if self.n_frames == 0:
             return []
         self._final = True
-        out = self._process(self.n_frames, final=True)
+        out = self._process(self._front.finish())
         out.extend(self._end_movement(self.n_frames - 1, final=True))
         return out
 
     def reset(self) -> None:
         """Forget the stream (buffers kept)."""
-        self.lowpass.reset()
-        self._last_angles = None
-        self._prev_frame_time = -math.inf
+        self._front.reset()
         self._reset_state()
         if self._ring is not None:
-            self._ring.end = self._times.end = self._z.end = 0  # type: ignore[union-attr]
+            self._ring.end = self._times.end = 0  # type: ignore[union-attr]
             if self._raw is not None:
                 self._raw.end = 0
-
-    # ------------------------------------------------------------------ z
-
-    def _speeds(self, stop: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """z and t of frames [self._next, stop) (velocity by numpy.gradient's rules; the last
-        frame of the stream by a backward difference when ``stop`` is n_frames)."""
-        assert self._ring is not None and self._times is not None
-        a = self._next
-        lo = max(0, a - 1)
-        hi = min(self.n_frames, stop + 1)
-        x = self._ring.window(lo, hi)
-        t = self._times.window(lo, hi)[:, 0]
-        idx = np.arange(a, stop)
-        i = idx - lo
-        v = np.empty((idx.size, x.shape[1]))
-        n = hi - lo
-        inner = (idx > 0) & (i + 1 < n)
-        if np.any(inner):
-            ii = i[inner]
-            hs = (t[ii] - t[ii - 1])[:, None]
-            hd = (t[ii + 1] - t[ii])[:, None]
-            v[inner] = (hs**2 * x[ii + 1] - hd**2 * x[ii - 1] + (hd**2 - hs**2) * x[ii]) / (
-                hs * hd * (hd + hs)
-            )
-        first = idx == 0
-        if np.any(first):
-            v[first] = (x[1] - x[0]) / (t[1] - t[0]) if n > 1 else 0.0
-        last = ~inner & ~first
-        if np.any(last):
-            ii = i[last]
-            v[last] = (x[ii] - x[ii - 1]) / (t[ii] - t[ii - 1])[:, None]
-        return np.einsum("ij,ij->i", v, v), t[i]
 
     # ------------------------------------------------------------------ SEG-2
 
     def _is_stop(self, z: float, c: float) -> bool:
         return z <= (ROBUST_REST * c if self.robust else _STILL * c)
 
-    def _process(self, newest: int, *, final: bool) -> list[SegmentClosed | MovementEnded]:
-        stop = self.n_frames if final else newest  # frame `newest` waits for its successor
-        if stop <= self._next:
-            return []
-        zs, ts = self._speeds(stop)
-        assert self._z is not None and self._times is not None
+    def _process(self, speeds: NDArray[np.float64]) -> list[SegmentClosed | MovementEnded]:
+        """SEG-2 steps through the rows ``(z, t, decided at, threshold)`` of the front end,
+        frames ``_next, _next + 1, ...``."""
         out: list[SegmentClosed | MovementEnded] = []
-        z_list = zs.tolist()
-        t_list = ts.tolist()
-        # A frame's decision needs its successor (velocity): the event time is that frame's.
-        last = self.n_frames - 1
-        e_list = self._times.window(self._next + 1, min(stop + 1, last + 1))[:, 0].tolist()
-        while len(e_list) < len(t_list):
-            e_list.append(float(self._times.frame(last)[0]))
-        self._z.extend(zs[:, None])
         base = self._next
-        for j, (z, t, emitted) in enumerate(zip(z_list, t_list, e_list, strict=True)):
+        rows = speeds.tolist()
+        for j, (z, t, emitted, c) in enumerate(rows):
+            self._ck = c
             self._step(base + j, z, t, emitted, out)
-        self._next = stop
+        self._next = base + len(rows)
         return out
 
     def _threshold(self, f: int) -> float:
-        if self.threshold == "fixed":
-            return self.c
-        if f % _EVERY == 0:
-            assert self._z is not None
-            a = max(self._z.start, f + 1 - self._window_frames)
-            s = float(np.quantile(self._z.window(a, f + 1), 0.95))
-            self._ck = min(max(ROBUST_FRACTION * s, self.c / ROBUST_SLOWEST), self.c)
+        """The threshold of frame ``f`` (the one being stepped): ``c``, or the adaptive
+        value the front end computed (module docstring)."""
         return self._ck
 
     def _step(

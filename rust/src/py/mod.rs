@@ -7,6 +7,7 @@ mod arrays;
 mod dtw;
 mod dtw_online;
 mod errors;
+mod front_online;
 mod linalg;
 mod signal;
 mod sosfilt_online;
@@ -23,6 +24,7 @@ fn _visprim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     dtw::register(m)?;
     dtw_online::register(m)?;
     sosfilt_online::register(m)?;
+    front_online::register(m)?;
     triangulate::register(m)?;
     Ok(())
 }
