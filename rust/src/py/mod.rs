@@ -7,6 +7,7 @@ mod arrays;
 mod dtw;
 mod dtw_online;
 mod errors;
+mod gif;
 mod linalg;
 mod signal;
 mod sosfilt_online;
@@ -24,6 +25,7 @@ fn _visprim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     dtw_online::register(m)?;
     sosfilt_online::register(m)?;
     triangulate::register(m)?;
+    gif::register(m)?;
     Ok(())
 }
 

@@ -1,0 +1,66 @@
+//! Binding of the GIF frame encoder ([`crate::gif`]): the class `GifFrames`.
+//!
+//! Takes the colour table and each frame as `bytes` (read in place), encodes a frame with the
+//! GIL released (so the thread drawing the next frame runs meanwhile) and returns its blocks
+//! as `bytes`. Size checks live in the kernel and come back as `ValueError`.
+
+use pyo3::prelude::*;
+use pyo3::types::PyBytes;
+
+use crate::gif;
+
+/// GIF89a frame blocks from RGB frames of one size: palette lookup, changed rectangle, LZW.
+///
+/// ``GifFrames(width, height, lut)``: ``lut`` is 262,144 palette indices (``bytes``), the
+/// index of colour ``(r, g, b)`` at ``(r >> 2) | (g >> 2) << 6 | (b >> 2) << 12``; index
+/// ``TRANSPARENT`` (255) is reserved. ``frame(rgb, delay)`` encodes the next frame (packed
+/// RGB ``bytes``, ``width * height * 3``) shown for ``delay`` centiseconds and returns
+/// ``(blocks, (x0, y0, x1, y1))``: the graphic control extension, image descriptor and image
+/// data of the frame, and the rectangle written (the whole first frame, then the pixels
+/// that changed; unchanged ones inside are transparent over the kept previous frame).
+/// The blocks use the file's global colour table.
+#[pyclass(name = "GifFrames", module = "visprim._visprim")]
+struct GifFrames {
+    inner: gif::GifFrames,
+}
+
+#[pymethods]
+impl GifFrames {
+    #[classattr]
+    const TRANSPARENT: u8 = gif::TRANSPARENT;
+
+    #[new]
+    fn new(width: usize, height: usize, lut: &[u8]) -> PyResult<Self> {
+        Ok(Self {
+            inner: gif::GifFrames::new(width, height, lut)?,
+        })
+    }
+
+    /// The blocks of the next frame and the rectangle written.
+    #[allow(clippy::type_complexity)]
+    fn frame<'py>(
+        &mut self,
+        py: Python<'py>,
+        rgb: &[u8],
+        delay: u16,
+    ) -> PyResult<(Bound<'py, PyBytes>, (usize, usize, usize, usize))> {
+        let inner = &mut self.inner;
+        let (out, r) = py.detach(|| -> crate::Result<_> {
+            let mut out = Vec::new();
+            let r = inner.frame(rgb, delay, &mut out)?;
+            Ok((out, r))
+        })?;
+        Ok((PyBytes::new(py, &out), (r.x0, r.y0, r.x1, r.y1)))
+    }
+
+    /// Bytes held by the encoder (colour table, two frames of indices, LZW buffers).
+    #[getter]
+    fn memory_bytes(&self) -> usize {
+        self.inner.memory_bytes()
+    }
+}
+
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<GifFrames>()?;
+    Ok(())
+}
