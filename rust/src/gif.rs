@@ -1,16 +1,17 @@
 //! GIF frames from RGB pixels: palette lookup, the changed rectangle, LZW.
 //!
-//! A [`GifFrames`] encoder turns a stream of RGB frames (packed `r g b` bytes, row-major) of
-//! one size into GIF89a frame blocks (graphic control extension, image descriptor, LZW image
-//! data). It holds two frames of palette indices (the last and the current one) whatever the
-//! length of the stream.
+//! A [`GifFrames`] encoder turns a stream of frames of one size (row-major pixels of packed
+//! `r g b` or `r g b x` bytes) into GIF89a frame blocks (graphic control extension, image
+//! descriptor, LZW image data). Whatever the length of the stream it holds one frame of
+//! pixels and one of palette indices (the last frame), and the rectangle being encoded.
 //!
 //! * **Palette.** A pixel `(r, g, b)` becomes `lut[(r >> 2) | (g >> 2) << 6 | (b >> 2) << 12]`:
 //!   one index per cell of 4 × 4 × 4 colour values, the table the caller built (Pillow's
 //!   `quantize(palette=…)` looks colours up in cells of exactly this size, so a table filled
 //!   from it reproduces Pillow's indices). Index [`TRANSPARENT`] is reserved.
 //! * **Changed rectangle.** The first frame is written whole. Every later frame is the
-//!   smallest rectangle holding every pixel whose index differs from the previous frame's;
+//!   smallest rectangle holding every pixel whose index differs from the previous frame's
+//!   (only pixels whose bytes changed are looked up again);
 //!   inside it, pixels that did not change are [`TRANSPARENT`], and the frame's disposal is
 //!   "do not dispose", so a decoder shows exactly the current frame's indices. A frame equal
 //!   to the last one is a single transparent pixel.
@@ -162,9 +163,14 @@ pub struct GifFrames {
     width: usize,
     height: usize,
     lut: Vec<u8>,
-    /// Palette indices of the previous frame and of the current one (`width * height` each).
-    prev: Vec<u8>,
-    cur: Vec<u8>,
+    /// Bytes per pixel of the frames (3: RGB, 4: RGBX), fixed by the first frame.
+    bpp: usize,
+    /// The previous frame's pixels (`width * height * bpp` bytes, after the first frame).
+    pixels: Vec<u8>,
+    /// Palette indices a decoder shows after the last frame (`width * height`).
+    shown: Vec<u8>,
+    /// Indices of the changed pixel rectangle of the frame being encoded.
+    scratch: Vec<u8>,
     started: bool,
     lzw: Lzw,
 }
@@ -176,6 +182,44 @@ pub struct Rect {
     pub y0: usize,
     pub x1: usize,
     pub y1: usize,
+}
+
+impl Rect {
+    fn width(&self) -> usize {
+        self.x1 - self.x0
+    }
+}
+
+/// Grows `rect` (None: empty) by the columns `first..last` of row `y`.
+fn grow(rect: &mut Option<Rect>, y: usize, first: usize, last: usize) {
+    *rect = Some(match *rect {
+        None => Rect {
+            x0: first,
+            y0: y,
+            x1: last,
+            y1: y + 1,
+        },
+        Some(r) => Rect {
+            x0: r.x0.min(first),
+            y0: r.y0,
+            x1: r.x1.max(last),
+            y1: y + 1,
+        },
+    });
+}
+
+/// The first and one past the last position where `a` and `b` (equal lengths) differ.
+fn differing(a: &[u8], b: &[u8]) -> Option<(usize, usize)> {
+    if a == b {
+        return None;
+    }
+    let first = a.iter().zip(b).position(|(p, q)| p != q)?;
+    let last = a.len()
+        - a.iter()
+            .rev()
+            .zip(b.iter().rev())
+            .position(|(p, q)| p != q)?;
+    Some((first, last))
 }
 
 impl GifFrames {
@@ -199,97 +243,164 @@ impl GifFrames {
             )));
         }
         let n = buffer::elements::<u8>(&[height, width], "GIF frame indices")?;
-        let table = buffer::try_copy(lut, "colour table")?;
         Ok(Self {
             width,
             height,
-            lut: table,
-            prev: buffer::try_filled(n, 0u8, "GIF frame indices")?,
-            cur: buffer::try_filled(n, 0u8, "GIF frame indices")?,
+            lut: buffer::try_copy(lut, "colour table")?,
+            bpp: 0,
+            pixels: Vec::new(),
+            shown: buffer::try_filled(n, 0u8, "GIF frame indices")?,
+            scratch: Vec::new(),
             started: false,
             lzw: Lzw::new()?,
         })
     }
 
-    /// Bytes held by the encoder (tables and two frames of indices).
+    /// Bytes held by the encoder (tables, the last frame's pixels and indices, buffers).
     pub fn memory_bytes(&self) -> usize {
         self.lut.len()
-            + self.prev.len()
-            + self.cur.len()
+            + self.pixels.capacity()
+            + self.shown.len()
+            + self.scratch.capacity()
             + self.lzw.slots.len() * 4
             + self.lzw.bytes.capacity()
     }
 
-    /// The rectangle of pixels whose index differs between `prev` and `cur`, if any.
-    fn changed(&self) -> Option<Rect> {
-        let w = self.width;
-        let rows = self.prev.chunks_exact(w).zip(self.cur.chunks_exact(w));
-        let (mut y0, mut y1, mut x0, mut x1) = (usize::MAX, 0, w, 0);
-        for (y, (a, b)) in rows.enumerate() {
-            if a == b {
-                continue;
+    /// The rectangle of pixels whose bytes differ from the previous frame's, if any.
+    fn changed_pixels(&self, px: &[u8]) -> Option<Rect> {
+        let (stride, bpp) = (self.width * self.bpp, self.bpp);
+        let mut rect = None;
+        for (y, (a, b)) in self
+            .pixels
+            .chunks_exact(stride)
+            .zip(px.chunks_exact(stride))
+            .enumerate()
+        {
+            if let Some((first, last)) = differing(a, b) {
+                grow(&mut rect, y, first / bpp, last.div_ceil(bpp));
             }
-            let first = a.iter().zip(b).position(|(p, q)| p != q).unwrap_or(0);
-            let last = w - a.iter().rev().zip(b.iter().rev()).position(|(p, q)| p != q).unwrap_or(0);
-            y0 = y0.min(y);
-            y1 = y + 1;
-            x0 = x0.min(first);
-            x1 = x1.max(last);
         }
-        (y0 != usize::MAX).then_some(Rect { x0, y0, x1, y1 })
+        rect
     }
 
-    /// Encodes the next frame, `rgb` (`width * height * 3` bytes), shown for `delay`
-    /// centiseconds, and appends its blocks to `out`. Returns the rectangle written.
-    pub fn frame(&mut self, rgb: &[u8], delay: u16, out: &mut Vec<u8>) -> Result<Rect> {
-        let n = self.prev.len();
-        if rgb.len() != n * 3 {
+    /// Encodes the next frame, `px` (`width * height` pixels of 3 bytes, RGB, or 4, RGBX: the
+    /// fourth is ignored; every frame of a stream alike), shown for `delay` centiseconds, and
+    /// appends its blocks to `out`. Returns the rectangle written.
+    pub fn frame(&mut self, px: &[u8], delay: u16, out: &mut Vec<u8>) -> Result<Rect> {
+        let n = self.shown.len();
+        let bpp = if px.len() == n * 3 { 3 } else { 4 };
+        if px.len() != n * bpp || (self.started && bpp != self.bpp) {
             return Err(Error::Shape(format!(
-                "a {} x {} RGB frame has {} bytes, got {}",
+                "a {} x {} frame has {} (RGB) or {} (RGBX) bytes{}, got {}",
                 self.width,
                 self.height,
                 n * 3,
-                rgb.len()
+                n * 4,
+                if self.started {
+                    ", as many as the first"
+                } else {
+                    ""
+                },
+                px.len()
             )));
         }
-        for (dst, px) in self.cur.iter_mut().zip(rgb.chunks_exact(3)) {
-            *dst = self.lut[cell(px[0], px[1], px[2])];
-        }
         let first = !self.started;
+        let lut = &self.lut;
+        let index = |p: &[u8]| lut[cell(p[0], p[1], p[2])];
         let rect = if first {
-            Rect { x0: 0, y0: 0, x1: self.width, y1: self.height }
+            self.bpp = bpp;
+            self.pixels = buffer::try_copy(px, "GIF frame pixels")?;
+            for (dst, p) in self.shown.iter_mut().zip(px.chunks_exact(bpp)) {
+                *dst = index(p);
+            }
+            Rect {
+                x0: 0,
+                y0: 0,
+                x1: self.width,
+                y1: self.height,
+            }
         } else {
-            self.changed().unwrap_or(Rect { x0: 0, y0: 0, x1: 1, y1: 1 })
+            self.changed_indices(px)?.unwrap_or(Rect {
+                x0: 0,
+                y0: 0,
+                x1: 1,
+                y1: 1,
+            })
         };
         // Graphic control extension: disposal 1 (keep), transparency after the first frame.
         let flags = 0b0000_0100 | u8::from(!first);
-        out.try_reserve(10 + 8)
+        out.try_reserve(18)
             .map_err(|e| Error::Memory(format!("GIF frame header: {e}")))?;
         out.extend_from_slice(&[0x21, 0xF9, 0x04, flags]);
         out.extend_from_slice(&delay.to_le_bytes());
         out.extend_from_slice(&[TRANSPARENT, 0x00]);
         // Image descriptor, no local colour table, not interlaced.
         out.push(0x2C);
-        for v in [rect.x0, rect.y0, rect.x1 - rect.x0, rect.y1 - rect.y0] {
+        for v in [rect.x0, rect.y0, rect.width(), rect.y1 - rect.y0] {
             out.extend_from_slice(&(v as u16).to_le_bytes());
         }
         out.push(0x00);
-        let w = self.width;
-        let (prev, cur) = (&self.prev, &self.cur);
-        let pixels = (rect.y0..rect.y1).flat_map(move |y| {
-            let row = y * w;
-            (row + rect.x0..row + rect.x1).map(move |i| {
-                if !first && prev[i] == cur[i] {
-                    TRANSPARENT
-                } else {
-                    cur[i]
-                }
-            })
-        });
-        self.lzw.encode(pixels, out)?;
-        std::mem::swap(&mut self.prev, &mut self.cur);
+        if first {
+            self.lzw.encode(self.shown.iter().copied(), out)?;
+        } else {
+            // ``scratch`` holds the rectangle's pixels: an index, or transparent (unchanged).
+            if self.scratch.is_empty() {
+                self.scratch.push(TRANSPARENT); // no change: one transparent pixel
+            }
+            self.lzw.encode(self.scratch.iter().copied(), out)?;
+        }
         self.started = true;
         Ok(rect)
+    }
+
+    /// Finds the pixels of `px` whose index differs from the one shown, updates ``shown``
+    /// and ``pixels``, and leaves in ``scratch`` the smallest rectangle holding them (the
+    /// new index, or [`TRANSPARENT`] for a pixel that keeps its index). None: no change.
+    fn changed_indices(&mut self, px: &[u8]) -> Result<Option<Rect>> {
+        self.scratch.clear();
+        let Some(outer) = self.changed_pixels(px) else {
+            return Ok(None);
+        };
+        let (w, bpp) = (self.width, self.bpp);
+        let lut = &self.lut;
+        // The new indices of the changed pixel rectangle, then the rectangle where they differ.
+        self.scratch.clear();
+        let area = outer.width() * (outer.y1 - outer.y0);
+        self.scratch.try_reserve(area).map_err(|e| {
+            Error::Memory(format!("GIF: {area} indices of a changed rectangle: {e}"))
+        })?;
+        let mut inner: Option<Rect> = None;
+        for y in outer.y0..outer.y1 {
+            let row = &px[(y * w + outer.x0) * bpp..(y * w + outer.x1) * bpp];
+            let start = self.scratch.len();
+            self.scratch
+                .extend(row.chunks_exact(bpp).map(|p| lut[cell(p[0], p[1], p[2])]));
+            let shown = &self.shown[y * w + outer.x0..y * w + outer.x1];
+            if let Some((a, b)) = differing(&self.scratch[start..], shown) {
+                grow(&mut inner, y, outer.x0 + a, outer.x0 + b);
+            }
+            let span = (y * w + outer.x0) * bpp..(y * w + outer.x1) * bpp;
+            self.pixels[span.clone()].copy_from_slice(&px[span]);
+        }
+        let Some(inner) = inner else {
+            self.scratch.clear();
+            return Ok(None);
+        };
+        // Transparent where the index is kept; the shown indices become the new ones.
+        let ow = outer.width();
+        let mut k = 0;
+        for y in inner.y0..inner.y1 {
+            let new = (y - outer.y0) * ow + (inner.x0 - outer.x0);
+            for (j, x) in (inner.x0..inner.x1).enumerate() {
+                let v = self.scratch[new + j];
+                let s = &mut self.shown[y * w + x];
+                self.scratch[k] = if *s == v { TRANSPARENT } else { v };
+                *s = v;
+                k += 1;
+            }
+        }
+        self.scratch.truncate(k);
+        Ok(Some(inner))
     }
 }
 
@@ -363,7 +474,9 @@ mod tests {
     }
 
     fn lcg(seed: &mut u64) -> u64 {
-        *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        *seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         *seed >> 33
     }
 
@@ -398,7 +511,15 @@ mod tests {
         let mut rgb = vec![0u8; w * h * 3];
         let mut out = Vec::new();
         let full = enc.frame(&rgb, 4, &mut out).unwrap();
-        assert_eq!(full, Rect { x0: 0, y0: 0, x1: 7, y1: 5 });
+        assert_eq!(
+            full,
+            Rect {
+                x0: 0,
+                y0: 0,
+                x1: 7,
+                y1: 5
+            }
+        );
         assert_eq!(&out[..8], &[0x21, 0xF9, 0x04, 0x04, 4, 0, TRANSPARENT, 0]);
         // Two pixels change: (2, 1) and (4, 3); a change within one colour cell does not count.
         rgb[(w + 2) * 3] = 40;
@@ -406,15 +527,69 @@ mod tests {
         rgb[(4 * w + 6) * 3] = 2;
         out.clear();
         let r = enc.frame(&rgb, 4, &mut out).unwrap();
-        assert_eq!(r, Rect { x0: 2, y0: 1, x1: 5, y1: 4 });
+        assert_eq!(
+            r,
+            Rect {
+                x0: 2,
+                y0: 1,
+                x1: 5,
+                y1: 4
+            }
+        );
         assert_eq!(out[3], 0x05, "keep the frame, transparency on");
         let t = TRANSPARENT;
         let expected = [10, t, t, t, t, t, t, t, 20];
         assert_eq!(decode(&out[18..]), expected);
         out.clear();
         let same = enc.frame(&rgb, 4, &mut out).unwrap();
-        assert_eq!(same, Rect { x0: 0, y0: 0, x1: 1, y1: 1 });
+        assert_eq!(
+            same,
+            Rect {
+                x0: 0,
+                y0: 0,
+                x1: 1,
+                y1: 1
+            }
+        );
         assert_eq!(decode(&out[18..]), [t]);
+    }
+
+    #[test]
+    fn rgbx_frames_ignore_the_fourth_byte_and_a_pixel_change_of_one_cell() {
+        let (w, h) = (4, 3);
+        let mut enc = GifFrames::new(w, h, &grey_lut()).unwrap();
+        let mut px = vec![0u8; w * h * 4];
+        let mut out = Vec::new();
+        enc.frame(&px, 1, &mut out).unwrap();
+        px[(w + 1) * 4 + 3] = 9; // the fourth byte
+        px[(2 * w + 3) * 4] = 3; // red 3: still cell 0
+        out.clear();
+        assert_eq!(
+            enc.frame(&px, 1, &mut out).unwrap(),
+            Rect {
+                x0: 0,
+                y0: 0,
+                x1: 1,
+                y1: 1
+            }
+        );
+        assert_eq!(decode(&out[18..]), [TRANSPARENT]);
+        px[3 * 4] = 255; // pixel (3, 0) -> cell 63
+        out.clear();
+        assert_eq!(
+            enc.frame(&px, 1, &mut out).unwrap(),
+            Rect {
+                x0: 3,
+                y0: 0,
+                x1: 4,
+                y1: 1
+            }
+        );
+        assert_eq!(decode(&out[18..]), [63]);
+        assert!(
+            enc.frame(&px[..w * h * 3], 1, &mut Vec::new()).is_err(),
+            "RGB after RGBX"
+        );
     }
 
     #[test]

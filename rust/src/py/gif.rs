@@ -9,12 +9,13 @@ use pyo3::types::PyBytes;
 
 use crate::gif;
 
-/// GIF89a frame blocks from RGB frames of one size: palette lookup, changed rectangle, LZW.
+/// GIF89a frame blocks from RGB(X) frames of one size: palette lookup, changed rectangle, LZW.
 ///
 /// ``GifFrames(width, height, lut)``: ``lut`` is 262,144 palette indices (``bytes``), the
 /// index of colour ``(r, g, b)`` at ``(r >> 2) | (g >> 2) << 6 | (b >> 2) << 12``; index
-/// ``TRANSPARENT`` (255) is reserved. ``frame(rgb, delay)`` encodes the next frame (packed
-/// RGB ``bytes``, ``width * height * 3``) shown for ``delay`` centiseconds and returns
+/// ``TRANSPARENT`` (255) is reserved. ``frame(pixels, delay)`` encodes the next frame (packed
+/// ``bytes``, RGB: ``width * height * 3``, or RGBX: ``* 4``, the fourth byte ignored; every
+/// frame like the first) shown for ``delay`` centiseconds and returns
 /// ``(blocks, (x0, y0, x1, y1))``: the graphic control extension, image descriptor and image
 /// data of the frame, and the rectangle written (the whole first frame, then the pixels
 /// that changed; unchanged ones inside are transparent over the kept previous frame).
@@ -41,13 +42,13 @@ impl GifFrames {
     fn frame<'py>(
         &mut self,
         py: Python<'py>,
-        rgb: &[u8],
+        pixels: &[u8],
         delay: u16,
     ) -> PyResult<(Bound<'py, PyBytes>, (usize, usize, usize, usize))> {
         let inner = &mut self.inner;
         let (out, r) = py.detach(|| -> crate::Result<_> {
             let mut out = Vec::new();
-            let r = inner.frame(rgb, delay, &mut out)?;
+            let r = inner.frame(pixels, delay, &mut out)?;
             Ok((out, r))
         })?;
         Ok((PyBytes::new(py, &out), (r.x0, r.y0, r.x1, r.y1)))
