@@ -110,3 +110,18 @@ def test_write_video_refuses_frames_of_another_size(tmp_path):
     with pytest.raises(ValueError, match="frame 1"):
         write_video(tmp_path / "v.gif", iter(frames), 10.0)
     assert not list(tmp_path.iterdir())
+
+
+def test_the_image_memory_and_bytes_give_the_same_blocks():
+    images = [Image.fromarray(f) for f in _frames(3, n=12)]
+    lut = palette_lut(images[0].quantize(colors=255, dither=Image.Dither.NONE))
+    direct, copied = (_visprim.GifFrames(83, 61, lut) for _ in range(2))
+    for im in images:
+        a = direct.frame_arrow(*im.__arrow_c_array__(), 5)
+        b = copied.frame(im.tobytes("raw", "RGBX"), 5)
+        assert a == b
+    grey = Image.new("L", (83, 61)).__arrow_c_array__()
+    with pytest.raises(ValueError, match="4 bytes a pixel"):
+        direct.frame_arrow(*grey, 5)
+    with pytest.raises(ValueError):
+        direct.frame_arrow(grey[1], grey[0], 5)  # the capsules swapped
