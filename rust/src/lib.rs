@@ -32,6 +32,8 @@ pub mod sosfilt_online;
 
 pub mod triangulate;
 
+pub mod gif;
+
 pub use error::{Error, Result};
 
 /// The SIMD level the kernels run at (the CPU's best, capped by `VISPRIM_SIMD`; see

@@ -8,6 +8,7 @@ mod dtw;
 mod dtw_online;
 mod errors;
 mod front_online;
+mod gif;
 mod linalg;
 mod signal;
 mod sosfilt_online;
@@ -26,6 +27,7 @@ fn _visprim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     sosfilt_online::register(m)?;
     front_online::register(m)?;
     triangulate::register(m)?;
+    gif::register(m)?;
     Ok(())
 }
 
