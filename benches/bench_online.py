@@ -18,7 +18,8 @@ Measures, and writes a stamped table (date, commit, CPU, instruction set, load a
    a model fitted on all the benchmarks' recordings. Boundaries ±100 ms F1, primitive per
    segment, final class.
 2. **Latency**: stream time from each segment's end to its event, pooled over (1), apart
-   for inner boundaries and a movement's last segment (closed after the rest timeout).
+   for inner boundaries and a movement's last segment (under ``seg2_boundary="slowest"``
+   the last closes after the rest timeout; under ``"first_stop"`` both at the stop).
 3. **Throughput**, one stream on one core: the longest HDM05 recording looped to
    ``--stream`` seconds, pushed in chunks of 1, 8, 64 and 1024 frames, no classifier and
    the open-end DTW recogniser (DTWClassifier); MotionClassifier (which classifies the whole
@@ -321,8 +322,10 @@ def _fidelity_lines(fid: dict[str, Any], notes: list[str]) -> list[str]:
         "Targets: F1 ≥ 0.90, primitive ≥ 90 %, final class ≥ 97 %, latency p95 ≤ 150 ms. "
         "Latency: stream time from a segment's end to its event (the causal filter's delay "
         "included); segments closed by the end of the recording are left out. 'inner': "
-        "closed when the next stroke starts; 'last': a movement's last segment, closed "
-        "after the rest timeout.",
+        "followed by another stroke of the movement; 'last': a movement's last segment. "
+        "Under seg2_boundary='first_stop' (the default) both close at the stroke's first "
+        "stop; under 'slowest' an inner one closes when the next stroke starts and a last "
+        "one after the rest timeout.",
         "",
     ]
     lines += [f"- {n}" for n in notes]
