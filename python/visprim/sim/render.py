@@ -131,6 +131,11 @@ class Painter:
         """The canvas reduced to the output size."""
         return image.reduce(SUPERSAMPLE) if SUPERSAMPLE > 1 else image
 
+    def finish_part(self, image: Image.Image, box: tuple[int, int, int, int]) -> Image.Image:
+        """The part ``box`` of the canvas (its edges multiples of :data:`SUPERSAMPLE`)
+        reduced to the output size, without copying it out first."""
+        return image.reduce(SUPERSAMPLE, box=box) if SUPERSAMPLE > 1 else image.crop(box)
+
     # -------------------------------------------------------------- bodies
 
     def body_items(
@@ -165,12 +170,14 @@ class Painter:
                     normals = _FACE_NORMALS @ rot.T
                     facing = normals @ back > 1e-9
                     shade = 0.55 + 0.45 * np.maximum(0.0, normals @ self.light)
-                    for f in np.flatnonzero(facing):
-                        face = corners[_FACE_IDX[f]]
-                        items.append(
-                            (float(face.mean(axis=0) @ back), "face", self.project(face), 0.0,
-                             _rgb(base * shade[f]), edge)
-                        )  # fmt: skip
+                    faces = corners[_FACE_IDX[facing]]  # (n facing, 4 corners, 3)
+                    depths = faces.mean(axis=1) @ back
+                    pixels = self.project(faces)
+                    colours = np.clip(base * shade[facing][:, None], 0.0, 1.0) * 255 + 0.5
+                    for d, px, c in zip(
+                        depths.tolist(), pixels, colours.astype(int).tolist(), strict=True
+                    ):
+                        items.append((d, "face", px, 0.0, (c[0], c[1], c[2]), edge))
         return items
 
     @staticmethod
@@ -279,8 +286,9 @@ class _Label:
         y -= {"a": 0, "m": h / 2, "d": h}[anchor[1]]
         self.xy = (int(round(x)), int(round(y)))
 
-    def paste(self, image: Image.Image) -> None:
-        image.paste(self.image, self.xy, self.mask)
+    def paste(self, image: Image.Image, offset: tuple[int, int] = (0, 0)) -> None:
+        """Paste the label on ``image``, shifted by ``offset`` pixels (a panel's place)."""
+        image.paste(self.image, (self.xy[0] + offset[0], self.xy[1] + offset[1]), self.mask)
 
 
 class PlaybackDrawer:
@@ -409,12 +417,15 @@ class PlaybackDrawer:
         *,
         transforms: NDArray[np.float64] | None = None,
         time: float | None = None,
+        into: tuple[Image.Image, tuple[int, int]] | None = None,
     ) -> Image.Image:
         """Frame ``index`` as an RGB image; ``clock`` (s) overrides the time shown.
 
         ``transforms`` (n_bodies, 4, 4) draws the bodies there instead of at the stored
         frame (a pose between frames), and ``time`` (s, simulation) decides which via
-        points are shown reached; the path taken is drawn up to frame ``index``."""
+        points are shown reached; the path taken is drawn up to frame ``index``.
+        ``into = (image, (x, y))`` draws the frame into ``image`` at pixel ``(x, y)`` (a
+        panel of a larger frame; no copy of its own) and returns ``image``."""
         pb, p = self.playback, self.painter
         tfs = pb.frames[index] if transforms is None else transforms
         items = p.body_items(tfs[self.moving], self.moving_shapes)
@@ -437,13 +448,25 @@ class PlaybackDrawer:
             for layer, layer_box in layers:
                 paste_layer(image, layer, _intersection(layer_box, box))
             s = SUPERSAMPLE
-            self._small.paste(p.finish(image.crop(box)), (box[0] // s, box[1] // s))
-        out = self._small.copy()
+            self._small.paste(p.finish_part(image, box), (box[0] // s, box[1] // s))
+        out, at = _place(self._small, into)
         for label in self.labels:
-            label.paste(out)
+            label.paste(out, at)
         clock_text = f"t = {t if clock is None else clock:.2f} s"
-        p.text(out, (p.size[0] - 4, 4), clock_text, TEXT_PX, "ra")
+        p.text(out, (at[0] + p.size[0] - 4, at[1] + 4), clock_text, TEXT_PX, "ra")
         return out
+
+
+def _place(
+    panel: Image.Image, into: tuple[Image.Image, tuple[int, int]] | None
+) -> tuple[Image.Image, tuple[int, int]]:
+    """The image a finished ``panel`` is drawn on and the panel's pixel offset there: a copy
+    of it, or ``into = (image, (x, y))`` with the panel pasted at ``(x, y)``."""
+    if into is None:
+        return panel.copy(), (0, 0)
+    image, at = into
+    image.paste(panel, at)
+    return image, at
 
 
 def _box(points: NDArray[np.float64], margin: float) -> tuple[int, int, int, int] | None:

@@ -30,6 +30,7 @@ from visprim.sim.render import (
     _box,
     _even_box,
     _Label,
+    _place,
     _union,
 )
 from visprim.sim.video import write_video
@@ -160,8 +161,11 @@ class SideBySide:
         self._small = self.painter.finish(self._scratch)
         self._figure_box: tuple[int, int, int, int] | None = None
 
-    def human_frame(self, tau: float) -> Image.Image:
-        """The human panel at video time ``tau`` seconds.
+    def human_frame(
+        self, tau: float, into: tuple[Image.Image, tuple[int, int]] | None = None
+    ) -> Image.Image:
+        """The human panel at video time ``tau`` seconds (``into``: as
+        :meth:`~visprim.sim.render.PlaybackDrawer.draw`).
 
         Only the box that changed since the last frame (the last and the new stick figure,
         the new piece of trail) is redrawn and reduced: the same pixels as drawing the whole
@@ -195,12 +199,12 @@ class SideBySide:
             for x, y in pts:
                 draw.ellipse((x - r, y - r, x + r, y + r), fill=(60, 60, 60))
         if box is not None:
-            part = p.finish(self._scratch.crop(box))
+            part = p.finish_part(self._scratch, box)
             self._small.paste(part, (box[0] // s, box[1] // s))
-        out = self._small.copy()
+        out, at = _place(self._small, into)
         for label in self.labels:
-            label.paste(out)
-        p.text(out, (self.size[0] - 4, 4), f"t = {tau:.2f} s", TEXT_PX, "ra")
+            label.paste(out, at)
+        p.text(out, (at[0] + self.size[0] - 4, at[1] + 4), f"t = {tau:.2f} s", TEXT_PX, "ra")
         return out
 
     def frame(self, index: int) -> Image.Image:
@@ -213,8 +217,8 @@ class SideBySide:
         )
         w, h = self.size
         out = Image.new("RGB", (2 * w, h), (255, 255, 255))
-        out.paste(self.human_frame(tau), (0, 0))
-        out.paste(self.adonis.draw(k, clock=tau), (w, 0))
+        self.human_frame(tau, into=(out, (0, 0)))
+        self.adonis.draw(k, clock=tau, into=(out, (w, 0)))
         return out
 
     def frames(self) -> Iterator[Image.Image]:
