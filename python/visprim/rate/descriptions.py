@@ -385,7 +385,9 @@ def dct_counts(n: int, n_channels: int, order: Sequence[int]) -> NDArray[np.int6
     return counts
 
 
-def dct_rebuild_counts(values: NDArray[np.float64], counts: NDArray[np.int64]) -> NDArray[np.float64]:
+def dct_rebuild_counts(
+    values: NDArray[np.float64], counts: NDArray[np.int64]
+) -> NDArray[np.float64]:
     """Each channel j of ``values`` ``(T, C)`` rebuilt from its first ``counts[j]``
     orthonormal DCT-II coefficients (zero coefficients: the channel is zero)."""
     from scipy.fft import dct, idct
