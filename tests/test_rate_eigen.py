@@ -71,7 +71,7 @@ def test_dct_counts_split_evenly_and_in_order() -> None:
 
 
 def test_eigen_descriptions_count_and_choose() -> None:
-    """``eigen`` stores numbers − 2 coefficients; ``eigen|dct`` also one flag, and keeps
+    """``eigen`` stores numbers − 2 coefficients; ``eigen/dct`` also one flag, and keeps
     the closer of the eigen-movements and the DCT of the angles at that size."""
     rng = np.random.default_rng(2)
     angles = []
@@ -86,7 +86,7 @@ def test_eigen_descriptions_count_and_choose() -> None:
     code, rebuilt, numbers = eigen_describe(book, "eigen", 12.0, s, d, a)
     assert code == "eigen" and numbers == eigen_numbers(12.0, s)
     np.testing.assert_allclose(rebuilt, book.rebuild(d, numbers - 2))
-    code, rebuilt, numbers = eigen_describe(book, "eigen|dct", 12.0, s, d, a)
+    code, rebuilt, numbers = eigen_describe(book, "eigen/dct", 12.0, s, d, a)
     n = numbers - 3
     eigen_err = bone_rms_deg(book.rebuild(d, n), d)
     dct = dct_rebuild_counts(a, dct_counts(n, 4, book.dct_order[12.0]))
@@ -119,7 +119,7 @@ def _held_out_fold(bench):
         test,
         "g2",
         SMALL_MODEL,
-        ("eigen", "eigen|dct"),
+        ("eigen", "eigen/dct"),
         centres="projection",
         max_stroke=None,
         rows=rows,
@@ -137,7 +137,7 @@ def test_the_held_out_movements_never_enter_the_basis() -> None:
     assert book.dct_order == book_changed.dct_order
     # ... while the held-out movements, and so their scores, did change.
     assert [r["bone_deg"] for r in rows] != [r["bone_deg"] for r in rows_changed]
-    assert {r["family"] for r in rows} == {"eigen", "eigen|dct"}
+    assert {r["family"] for r in rows} == {"eigen", "eigen/dct"}
     assert all(r["numbers"] <= r["param"] * r["seconds"] + 1e-9 for r in rows)
 
 
@@ -156,10 +156,10 @@ def test_a_whole_movement_within_a_budget_states_its_description() -> None:
     book = fit_eigen_movements(directions[:-1], angles[:-1], seconds[:-1], (12.0,))
     values, d = describe_movement(book, directions[-1], angles[-1], seconds[-1], 12.0)
     assert d.numbers_per_s <= 12.0 and d.numbers == eigen_numbers(12.0, seconds[-1])
-    assert d.m == d.numbers - 3 and d.family in ("eigen", "eigen|dct")
+    assert d.m == d.numbers - 3 and d.family in ("eigen", "eigen/dct")
     assert ("eigen-movement" if d.family == "eigen" else "DCT") in d.label
     code, rebuilt, _ = eigen_describe(
-        book, "eigen|dct", 12.0, seconds[-1], directions[-1], angles[-1]
+        book, "eigen/dct", 12.0, seconds[-1], directions[-1], angles[-1]
     )
     expected = rebuilt if code == "eigen" else from_angles(rebuilt, "directions")
     np.testing.assert_allclose(values, expected)

@@ -36,11 +36,11 @@ segment is rebuilt by a description (:data:`FAMILIES`):
     the nearest primitive with its gain and a monotone time warp inside the segment,
     ``u → u + w u (1 − u)``, ``|w| < 1``, one number (:func:`warp_curves`), the primitive and
     warp chosen together among the nearest few primitives.
-``eigen``, ``eigen|dct``
+``eigen``, ``eigen/dct``
     no segments: the whole movement's bone directions, resampled onto its own duration,
     as the mean plus a superposition of its first m eigen-movements (the principal
     components of the training movements so resampled, :class:`EigenMovements`);
-    ``eigen|dct`` lets the encoder take instead the truncated DCT of the 4 arm angles of
+    ``eigen/dct`` lets the encoder take instead the truncated DCT of the 4 arm angles of
     the same size, whichever rebuilds the movement closer, and stores one number that says
     which. They store the start, the duration (and the flag) and ``floor(rate × seconds)``
     numbers in all (:func:`eigen_numbers`), at the rates :data:`BASELINE_RATES`.

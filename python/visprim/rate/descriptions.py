@@ -27,7 +27,7 @@ FAMILIES: tuple[str, ...] = (
     "bridge+gain",
     "bridge+residual",
     "eigen",
-    "eigen|dct",
+    "eigen/dct",
     "keyframes-angles",
     "keyframes-directions",
     "dct-angles",
@@ -311,10 +311,10 @@ def rebuild_segments(
 #: the longest HDM05 cut movement, so resampling loses nothing there).
 EIGEN_SAMPLES = 160
 #: The eigen-movement descriptions of a whole movement (no segments): ``eigen`` stores its
-#: first m coefficients along the eigen-movements; ``eigen|dct`` also lets the encoder take
+#: first m coefficients along the eigen-movements; ``eigen/dct`` also lets the encoder take
 #: the truncated DCT of the 4 arm angles instead, whichever rebuilds the movement closer,
 #: with one number that says which.
-EIGEN_FAMILIES: tuple[str, ...] = ("eigen", "eigen|dct")
+EIGEN_FAMILIES: tuple[str, ...] = ("eigen", "eigen/dct")
 #: Numbers per movement an eigen-movement description needs besides its coefficients: its
 #: start and its duration.
 EIGEN_HEAD = 2
@@ -349,7 +349,7 @@ class EigenMovements:
     of the first m eigen-movements, stretched back onto its duration.
 
     ``dct_order[rate]``: the order in which the 4 angle channels get the coefficients left
-    over when the DCT alternative of ``eigen|dct`` splits its coefficients evenly, learned
+    over when the DCT alternative of ``eigen/dct`` splits its coefficients evenly, learned
     on the training movements (the channel whose last coefficient matters most first)."""
 
     mean: NDArray[np.float64]
@@ -406,7 +406,7 @@ def _dct_order(
 ) -> tuple[int, ...]:
     """The angle channels ordered by how much the training movements' bone-direction error
     (mean squared, degrees²) grows when that channel has one DCT coefficient fewer than
-    the even split of the ``eigen|dct`` DCT alternative at ``rate`` (most first)."""
+    the even split of the ``eigen/dct`` DCT alternative at ``rate`` (most first)."""
     from visprim.features import from_angles
     from visprim.rate.measures import bone_rms_deg
 
@@ -434,7 +434,7 @@ def fit_eigen_movements(
     """Eigen-movements of training movements' bone directions (each ``(T, 6)``): the mean
     and every principal component of their resampled, flattened shapes
     (:class:`EigenMovements`); with their ``angles`` and ``seconds``, the DCT channel order
-    of ``eigen|dct`` at each of ``rates``."""
+    of ``eigen/dct`` at each of ``rates``."""
     x = np.stack([resample_movement(d, n_samples).ravel() for d in directions])
     mean = x.mean(axis=0)
     _, s, vt = np.linalg.svd(x - mean, full_matrices=False)
@@ -460,7 +460,7 @@ def eigen_describe(
     """One whole movement described within ``rate`` numbers per second by ``family``
     (:data:`EIGEN_FAMILIES`): which code was used (``"eigen"`` or ``"dct"``), the rebuilt
     channels (bone directions ``(T, 6)`` for eigen-movements, arm angles ``(T, 4)`` for
-    the DCT) and the numbers stored (:func:`eigen_numbers`). ``eigen|dct`` keeps the code
+    the DCT) and the numbers stored (:func:`eigen_numbers`). ``eigen/dct`` keeps the code
     whose bone directions lie closer to the movement's (the encoder has the movement)."""
     from visprim.features import from_angles
     from visprim.rate.measures import bone_rms_deg

@@ -46,7 +46,7 @@ SEARCH_FAMILIES: tuple[str, ...] = (
     "nearest+dct",
     "projection",
     "eigen",
-    "eigen|dct",
+    "eigen/dct",
 )
 #: Budgets (numbers per second of movement) of the nested table.
 BUDGETS: tuple[float, ...] = (10, 12, 16, 20)

@@ -112,7 +112,7 @@ MOVEMENT_COLUMNS: tuple[str, ...] = (
 
 def _movements_csv(results: Sequence[RateResult]) -> str:
     """Every scored held-out movement: its description (``code``: which code an
-    ``eigen|dct`` encoder used, else empty), numbers, seconds and errors (degrees)."""
+    ``eigen/dct`` encoder used, else empty), numbers, seconds and errors (degrees)."""
     from visprim.csvfile import csv_text
 
     rows = (
