@@ -203,7 +203,14 @@ def test_rate_benchmark_counts_and_report(tmp_path: Path) -> None:
         "rate.csv",
         "rate.md",
         "rate.png",
+        "rate_movements.csv",
     ]
+    per_movement = paths["rate_movements_csv"].read_text().splitlines()
+    assert (
+        per_movement[0]
+        == "benchmark,group,movement,family,param,code,numbers,seconds,bone_deg,joint_deg"
+    )
+    assert len(per_movement) == 1 + len(res.rows)
     lines = paths["rate_csv"].read_text().splitlines()
     assert lines[0].startswith("benchmark,family,param,numbers_per_s,bone_deg_median")
     assert len(lines) == 1 + len(summary)

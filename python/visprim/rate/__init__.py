@@ -36,6 +36,14 @@ segment is rebuilt by a description (:data:`FAMILIES`):
     the nearest primitive with its gain and a monotone time warp inside the segment,
     ``u → u + w u (1 − u)``, ``|w| < 1``, one number (:func:`warp_curves`), the primitive and
     warp chosen together among the nearest few primitives.
+``eigen``, ``eigen/dct``
+    no segments: the whole movement's bone directions, resampled onto its own duration,
+    as the mean plus a superposition of its first m eigen-movements (the principal
+    components of the training movements so resampled, :class:`EigenMovements`);
+    ``eigen/dct`` lets the encoder take instead the truncated DCT of the 4 arm angles of
+    the same size, whichever rebuilds the movement closer, and stores one number that says
+    which. They store the start, the duration (and the flag) and ``floor(rate × seconds)``
+    numbers in all (:func:`eigen_numbers`), at the rates :data:`BASELINE_RATES`.
 ``keyframes``, ``dct``
     baselines on the same movements: each channel (the 4 arm angles, or the 6 bone-direction
     coordinates) sampled at equally spaced instants and joined by a cubic spline, or its
@@ -76,13 +84,18 @@ from visprim.rate.budget import Description, describe_segments, share_budget
 from visprim.rate.descriptions import (
     BASELINE_RATES,
     CENTRES,
+    EIGEN_FAMILIES,
     FAMILIES,
     POSTURES,
     RATE_K,
     RATE_M,
     Codebook,
+    EigenMovements,
     dct_residual,
+    eigen_describe,
+    eigen_numbers,
     fit_codebook,
+    fit_eigen_movements,
     movement_numbers,
     rebuild_segments,
     segment_numbers,
@@ -97,12 +110,14 @@ from visprim.rate.report import best_within, rate_markdown, write_rate_report
 __all__ = [
     "BASELINE_RATES",
     "CENTRES",
+    "EIGEN_FAMILIES",
     "FAMILIES",
     "POSTURES",
     "RATE_K",
     "RATE_M",
     "Codebook",
     "Description",
+    "EigenMovements",
     "HeldOut",
     "NestedResult",
     "RateResult",
@@ -111,8 +126,11 @@ __all__ = [
     "dct_rebuild",
     "dct_residual",
     "describe_segments",
+    "eigen_describe",
+    "eigen_numbers",
     "evaluate_rate",
     "fit_codebook",
+    "fit_eigen_movements",
     "joint_rms_deg",
     "keyframe_rebuild",
     "movement_numbers",

@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 from visprim.params import RATE_OPTIONS
 from visprim.rate.descriptions import (
     BASELINE_RATES,
+    EIGEN_FAMILIES,
     FAMILIES,
     POSTURES,
     RATE_K,
@@ -22,7 +23,9 @@ from visprim.rate.descriptions import (
     RESIDUAL_K,
     Codebook,
     bridge_lines,
+    eigen_describe,
     fit_codebook,
+    fit_eigen_movements,
     movement_numbers,
     rebuild_segments,
     unit_bones,
@@ -306,6 +309,17 @@ def _fold(
                 for mv in movements:
                     _baseline(rows, mv, family, float(rate))
             continue
+        if family in EIGEN_FAMILIES:
+            key = f"{group}|eigen-movements"
+            eigen = None if prepared is None else prepared.get(key)
+            if eigen is None:
+                eigen = _eigen_book(train_corpus)
+                if prepared is not None:
+                    prepared[key] = eigen
+            for rate in BASELINE_RATES:
+                for mv in movements:
+                    _eigen_row(rows, mv, eigen, family, float(rate), joint)
+            continue
         # m up to f, and f itself: the per-segment projection.
         m_values = tuple(sorted({m for m in RATE_M if m < book.n_components} | {book.n_components}))
         params_of = {
@@ -371,6 +385,35 @@ def _bridge_codebook(
         n_init=3,
         seed=int(seg_model.seed),
     )
+
+
+def _eigen_book(train_corpus: Any) -> Any:
+    """The eigen-movements of a fold's training movements, over the spans their segments
+    cover (as the held-out movements are), with the DCT channel order at every baseline
+    rate."""
+    train = held_out_movements(train_corpus, "train", list(train_corpus.segments))
+    return fit_eigen_movements(
+        [mv.directions for mv in train],
+        [mv.angles for mv in train],
+        [mv.seconds for mv in train],
+        BASELINE_RATES,
+    )
+
+
+def _eigen_row(
+    rows: list[dict[str, Any]], mv: HeldOut, book: Any, family: str, rate: float, joint: bool
+) -> None:
+    """Score one held-out movement described whole by an eigen-movement ``family`` within
+    ``rate`` numbers per second (:func:`~visprim.rate.descriptions.eigen_describe`); the
+    row's ``code`` says which code the encoder used."""
+    code, rebuilt, numbers = eigen_describe(
+        book, family, rate, mv.seconds, mv.directions, mv.angles
+    )
+    if code == "dct":
+        _score(rows, mv, family, rate, numbers, angles=rebuilt)
+    else:
+        _score(rows, mv, family, rate, numbers, directions=rebuilt, joint=joint)
+    rows[-1]["code"] = code
 
 
 def _baseline(rows: list[dict[str, Any]], mv: HeldOut, family: str, rate: float) -> None:

@@ -147,6 +147,10 @@ class Description:
             return f"nearest primitive + {self.m} residual coefficient(s)"
         if self.family == "projection":
             return f"own projection ({self.m} coefficients)"
+        if self.family == "eigen":
+            return f"whole movement: {self.m} eigen-movement coefficient(s)"
+        if self.family == "eigen/dct":
+            return f"whole movement: DCT of the 4 angles, {self.m} coefficient(s) in all"
         return {"nearest": "nearest primitive", "nearest+gain": "nearest primitive × gain"}[
             self.family
         ]
@@ -310,3 +314,31 @@ def share_budget(
             f"({least:.1f} numbers/s: the nearest primitive for each of its {len(parts)} parts)"
         )
     return [o[j][0].numbers_per_s for o, j in zip(options, best[1], strict=True)]
+
+
+# ---------------------------------------------------------------------------- whole movement
+
+
+def describe_movement(
+    book: Any,
+    directions: NDArray[np.float64],
+    angles: NDArray[np.float64],
+    seconds: float,
+    budget: float,
+) -> tuple[NDArray[np.float64], Description]:
+    """One whole movement (no segments) described within ``budget`` numbers per second
+    through the eigen-movements ``book`` (:class:`~visprim.rate.descriptions.EigenMovements`,
+    learned from training movements): its bone directions ``(T, 6)`` rebuilt by the
+    encoder's choice of the eigen-movements or the truncated DCT of its 4 arm angles
+    ``(T, 4)`` (``eigen/dct``, :func:`~visprim.rate.descriptions.eigen_describe`), and the
+    :class:`Description` used: ``family`` ``"eigen"`` (eigen-movement coefficients) or
+    ``"eigen/dct"`` (DCT coefficients), ``m`` its coefficients, ``numbers`` all it stores
+    (start, duration, the flag and the coefficients)."""
+    from visprim.features import from_angles
+    from visprim.rate.descriptions import EIGEN_CHOICE, EIGEN_HEAD, eigen_describe
+
+    code, rebuilt, numbers = eigen_describe(book, "eigen/dct", budget, seconds, directions, angles)
+    m = numbers - EIGEN_HEAD - EIGEN_CHOICE
+    family = "eigen" if code == "eigen" else "eigen/dct"
+    values = rebuilt if code == "eigen" else from_angles(rebuilt, "directions")
+    return values, Description(family, m, numbers, float(seconds))

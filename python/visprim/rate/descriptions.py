@@ -3,7 +3,7 @@ segment (codebooks of primitive centres, residual coefficients, warps)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,6 +26,8 @@ FAMILIES: tuple[str, ...] = (
     "bridge",
     "bridge+gain",
     "bridge+residual",
+    "eigen",
+    "eigen/dct",
     "keyframes-angles",
     "keyframes-directions",
     "dct-angles",
@@ -300,3 +302,181 @@ def rebuild_segments(
             best[better] = err[better]
             out[better] = r[better]
     return out
+
+
+# ---------------------------------------------------------------------------- eigen-movements
+
+#: Samples per channel of a whole movement resampled onto its own duration for the
+#: eigen-movements (at least the frames of a 5.4 s movement at the study's 29.4 frames/s,
+#: the longest HDM05 cut movement, so resampling loses nothing there).
+EIGEN_SAMPLES = 160
+#: The eigen-movement descriptions of a whole movement (no segments): ``eigen`` stores its
+#: first m coefficients along the eigen-movements; ``eigen/dct`` also lets the encoder take
+#: the truncated DCT of the 4 arm angles instead, whichever rebuilds the movement closer,
+#: with one number that says which.
+EIGEN_FAMILIES: tuple[str, ...] = ("eigen", "eigen/dct")
+#: Numbers per movement an eigen-movement description needs besides its coefficients: its
+#: start and its duration.
+EIGEN_HEAD = 2
+#: Numbers of the choice between eigen-movements and DCT (one flag per movement).
+EIGEN_CHOICE = 1
+
+
+def eigen_numbers(rate: float, seconds: float) -> int:
+    """All the numbers an eigen-movement description of a ``seconds``-long movement
+    stores within ``rate`` numbers per second: ``floor(rate × seconds)`` (the start, the
+    duration, the choice flag and coefficients), at least the head and one coefficient. No
+    movement exceeds the rate (the DCT baseline rounds to whole coefficients per channel
+    and can exceed it a little)."""
+    return max(EIGEN_HEAD + EIGEN_CHOICE + 1, int(np.floor(rate * seconds + 1e-9)))
+
+
+def resample_movement(values: NDArray[np.float64], n: int) -> NDArray[np.float64]:
+    """Channels ``(T, C)`` of a movement read at ``n`` equally spaced instants from its
+    first frame to its last (linear interpolation): its shape on its own duration."""
+    v = np.asarray(values, dtype=np.float64)
+    t = np.linspace(0.0, 1.0, v.shape[0])
+    u = np.linspace(0.0, 1.0, int(n))
+    return np.stack([np.interp(u, t, v[:, j]) for j in range(v.shape[1])], axis=1)
+
+
+@dataclass
+class EigenMovements:
+    """PCA of whole training movements: each movement's bone directions ``(T, 6)`` resampled
+    to ``n_samples`` instants over its own duration (:func:`resample_movement`) and
+    flattened; ``mean`` ``(n_samples · 6,)`` and ``components`` ``(n_samples · 6, f)``, the
+    leading eigen-movements first. A movement is rebuilt as the mean plus a superposition
+    of the first m eigen-movements, stretched back onto its duration.
+
+    ``dct_order[rate]``: the order in which the 4 angle channels get the coefficients left
+    over when the DCT alternative of ``eigen/dct`` splits its coefficients evenly, learned
+    on the training movements (the channel whose last coefficient matters most first)."""
+
+    mean: NDArray[np.float64]
+    components: NDArray[np.float64]
+    n_samples: int
+    dct_order: dict[float, tuple[int, ...]]
+
+    @property
+    def n_components(self) -> int:
+        return int(self.components.shape[1])
+
+    def coefficients(self, directions: NDArray[np.float64]) -> NDArray[np.float64]:
+        """All coefficients ``(f,)`` of one movement's bone directions ``(T, 6)``."""
+        x = resample_movement(directions, self.n_samples).ravel()
+        return np.asarray((x - self.mean) @ self.components)
+
+    def rebuild(self, directions: NDArray[np.float64], m: int) -> NDArray[np.float64]:
+        """Bone directions ``(T, 6)`` of a movement rebuilt from its first ``m`` coefficients
+        (the mean movement for m = 0), on its own frames."""
+        m = int(np.clip(m, 0, self.n_components))
+        p = self.coefficients(directions)[:m]
+        curve = (self.mean + self.components[:, :m] @ p).reshape(self.n_samples, -1)
+        t = np.linspace(0.0, 1.0, directions.shape[0])
+        u = np.linspace(0.0, 1.0, self.n_samples)
+        return np.stack([np.interp(t, u, curve[:, j]) for j in range(curve.shape[1])], axis=1)
+
+
+def dct_counts(n: int, n_channels: int, order: Sequence[int]) -> NDArray[np.int64]:
+    """``n`` DCT coefficients split over ``n_channels`` channels: evenly, the remainder one
+    each to the first channels of ``order``."""
+    counts = np.full(int(n_channels), int(n) // int(n_channels), dtype=np.int64)
+    counts[list(order)[: int(n) % int(n_channels)]] += 1
+    return counts
+
+
+def dct_rebuild_counts(
+    values: NDArray[np.float64], counts: NDArray[np.int64]
+) -> NDArray[np.float64]:
+    """Each channel j of ``values`` ``(T, C)`` rebuilt from its first ``counts[j]``
+    orthonormal DCT-II coefficients (zero coefficients: the channel is zero)."""
+    from scipy.fft import dct, idct
+
+    c = dct(np.asarray(values, dtype=np.float64), type=2, norm="ortho", axis=0)
+    rows = np.arange(c.shape[0])[:, None]
+    c[rows >= np.asarray(counts)[None, :]] = 0.0
+    return np.asarray(idct(c, type=2, norm="ortho", axis=0), dtype=np.float64)
+
+
+def _dct_order(
+    angles: Sequence[NDArray[np.float64]],
+    directions: Sequence[NDArray[np.float64]],
+    seconds: Sequence[float],
+    rate: float,
+) -> tuple[int, ...]:
+    """The angle channels ordered by how much the training movements' bone-direction error
+    (mean squared, degrees²) grows when that channel has one DCT coefficient fewer than
+    the even split of the ``eigen/dct`` DCT alternative at ``rate`` (most first)."""
+    from visprim.features import from_angles
+    from visprim.rate.measures import bone_rms_deg
+
+    c = angles[0].shape[1]
+    loss = np.zeros(c)
+    for a, d, s in zip(angles, directions, seconds, strict=True):
+        n = eigen_numbers(rate, s) - EIGEN_HEAD - EIGEN_CHOICE
+        even = np.full(c, max(1, n // c), dtype=np.int64)
+        for j in range(c):
+            fewer = even.copy()
+            fewer[j] -= 1
+            rebuilt = from_angles(dct_rebuild_counts(a, fewer), "directions")
+            loss[j] += bone_rms_deg(rebuilt, d) ** 2
+    return tuple(int(j) for j in np.argsort(-loss, kind="stable"))
+
+
+def fit_eigen_movements(
+    directions: Sequence[NDArray[np.float64]],
+    angles: Sequence[NDArray[np.float64]] | None = None,
+    seconds: Sequence[float] | None = None,
+    rates: Iterable[float] = (),
+    *,
+    n_samples: int = EIGEN_SAMPLES,
+) -> EigenMovements:
+    """Eigen-movements of training movements' bone directions (each ``(T, 6)``): the mean
+    and every principal component of their resampled, flattened shapes
+    (:class:`EigenMovements`); with their ``angles`` and ``seconds``, the DCT channel order
+    of ``eigen/dct`` at each of ``rates``."""
+    x = np.stack([resample_movement(d, n_samples).ravel() for d in directions])
+    mean = x.mean(axis=0)
+    _, s, vt = np.linalg.svd(x - mean, full_matrices=False)
+    # Components without training variance carry nothing: keep the rank's.
+    keep = int(np.sum(s > s[0] * 1e-10)) if s.size and s[0] > 0 else 0
+    order: dict[float, tuple[int, ...]] = {}
+    if angles is not None and seconds is not None:
+        for rate in rates:
+            order[float(rate)] = _dct_order(angles, directions, seconds, float(rate))
+    return EigenMovements(
+        np.asarray(mean), np.ascontiguousarray(vt[:keep].T), int(n_samples), order
+    )
+
+
+def eigen_describe(
+    book: EigenMovements,
+    family: str,
+    rate: float,
+    seconds: float,
+    directions: NDArray[np.float64],
+    angles: NDArray[np.float64],
+) -> tuple[str, NDArray[np.float64], int]:
+    """One whole movement described within ``rate`` numbers per second by ``family``
+    (:data:`EIGEN_FAMILIES`): which code was used (``"eigen"`` or ``"dct"``), the rebuilt
+    channels (bone directions ``(T, 6)`` for eigen-movements, arm angles ``(T, 4)`` for
+    the DCT) and the numbers stored (:func:`eigen_numbers`). ``eigen/dct`` keeps the code
+    whose bone directions lie closer to the movement's (the encoder has the movement)."""
+    from visprim.features import from_angles
+    from visprim.rate.measures import bone_rms_deg
+
+    if family not in EIGEN_FAMILIES:
+        raise ValueError(f"eigen_describe: unknown family {family!r}")
+    numbers = eigen_numbers(rate, seconds)
+    if family == "eigen":
+        return "eigen", book.rebuild(directions, numbers - EIGEN_HEAD), numbers
+    n = numbers - EIGEN_HEAD - EIGEN_CHOICE
+    eigen = book.rebuild(directions, n)
+    c = angles.shape[1]
+    if n < c:
+        return "eigen", eigen, numbers
+    order = book.dct_order.get(float(rate), tuple(range(c)))
+    dct = dct_rebuild_counts(angles, dct_counts(n, c, order))
+    if bone_rms_deg(from_angles(dct, "directions"), directions) < bone_rms_deg(eigen, directions):
+        return "dct", dct, numbers
+    return "eigen", eigen, numbers

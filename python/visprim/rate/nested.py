@@ -34,11 +34,20 @@ from visprim.trial import split_arms
 SEARCH: tuple[tuple[str, float | None], ...] = tuple(
     (p, s) for p in RATE_OPTIONS["posture"].searched for s in RATE_OPTIONS["max_stroke"].searched
 )
-#: Primitive descriptions searched: the nearest primitive, with residual coefficients, with
-#: DCT coefficients of its residual, and the own projection (the gain, the warp and the
-#: bridges are left out to keep the nested run affordable on a shared 2-core machine; the full
-#: benchmark, ``visprim evaluate --rate``, measures them beside).
-SEARCH_FAMILIES: tuple[str, ...] = ("nearest", "residual", "nearest+dct", "projection")
+#: Descriptions searched: the nearest primitive, with residual coefficients, with DCT
+#: coefficients of its residual, the own projection, and the whole movement as a
+#: superposition of eigen-movements learned from the training movements, alone or with the
+#: encoder's choice of the DCT instead (the gain, the warp and the bridges are left out to
+#: keep the nested run affordable on a shared 2-core machine; the full benchmark, ``visprim
+#: evaluate --rate``, measures them beside).
+SEARCH_FAMILIES: tuple[str, ...] = (
+    "nearest",
+    "residual",
+    "nearest+dct",
+    "projection",
+    "eigen",
+    "eigen/dct",
+)
 #: Budgets (numbers per second of movement) of the nested table.
 BUDGETS: tuple[float, ...] = (10, 12, 16, 20)
 #: Baselines scored at each budget.

@@ -95,6 +95,37 @@ def _csv(results: Sequence[RateResult]) -> str:
     return csv_text(header, cells)
 
 
+#: Columns of ``rate_movements.csv``: one row per held-out movement and description.
+MOVEMENT_COLUMNS: tuple[str, ...] = (
+    "benchmark",
+    "group",
+    "movement",
+    "family",
+    "param",
+    "code",
+    "numbers",
+    "seconds",
+    "bone_deg",
+    "joint_deg",
+)
+
+
+def _movements_csv(results: Sequence[RateResult]) -> str:
+    """Every scored held-out movement: its description (``code``: which code an
+    ``eigen/dct`` encoder used, else empty), numbers, seconds and errors (degrees)."""
+    from visprim.csvfile import csv_text
+
+    rows = (
+        [
+            round(v, 4) if isinstance(v, float) else v
+            for v in ({**row, "benchmark": r.benchmark}.get(k, "") for k in MOVEMENT_COLUMNS)
+        ]
+        for r in results
+        for row in r.rows
+    )
+    return csv_text(list(MOVEMENT_COLUMNS), rows)
+
+
 def _plot(results: Sequence[RateResult], path: Path) -> None:
     import matplotlib
 
@@ -131,8 +162,8 @@ def _plot(results: Sequence[RateResult], path: Path) -> None:
 
 
 def write_rate_report(results: Sequence[RateResult], out_dir: str | os.PathLike[str]) -> dict:
-    """Write ``rate.md``, ``rate.csv`` and ``rate.png`` into ``out_dir`` (each atomically).
-    Returns the paths by kind."""
+    """Write ``rate.md``, ``rate.csv``, ``rate.png`` and ``rate_movements.csv`` into
+    ``out_dir`` (each atomically). Returns the paths by kind."""
     from visprim.atomic import atomic_file, write_text
 
     out = Path(out_dir)
@@ -141,9 +172,11 @@ def write_rate_report(results: Sequence[RateResult], out_dir: str | os.PathLike[
         "rate_markdown": out / "rate.md",
         "rate_csv": out / "rate.csv",
         "rate_plot": out / "rate.png",
+        "rate_movements_csv": out / "rate_movements.csv",
     }
     write_text(paths["rate_markdown"], rate_markdown(results), newline="")
     write_text(paths["rate_csv"], _csv(results), newline="")
+    write_text(paths["rate_movements_csv"], _movements_csv(results), newline="")
     with atomic_file(paths["rate_plot"]) as tmp:
         _plot(results, tmp)
     return paths
