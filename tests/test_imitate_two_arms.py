@@ -109,14 +109,13 @@ def test_a_one_arm_model_imitates_each_arm_on_its_own(one_arm_both) -> None:
         cols = slice(4 * side, 4 * side + 4)
         np.testing.assert_allclose(res.human[:, cols], alone.human, atol=1e-12)
         np.testing.assert_array_equal(res.primitives[res.segment_arm == side], alone.primitives)
-        # The same bones, up to 0.6° (0.38° measured with SEG-2's first-stop boundaries):
-        # inverse kinematics interpolates γ and α across the singular cone along the
-        # evaluation grid, which differs (one grid for both arms).
+        # The same bones, up to 0.3°: inverse kinematics interpolates γ and α across the
+        # singular cone along the evaluation grid, which differs (one grid for both arms).
         own = np.isfinite(alone.rebuild_angles[:, 0])
         np.testing.assert_allclose(
             from_angles(res.rebuild_angles[own, cols], "directions"),
             from_angles(alone.rebuild_angles[own], "directions"),
-            atol=1e-2,
+            atol=5e-3,
         )
     # Adonis follows both arms.
     a = res.metrics["adonis"]

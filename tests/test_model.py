@@ -21,7 +21,7 @@ DEFAULTS = {
     "seg1_adaptive": True,
     "seg2_threshold": None,
     "seg2_tuning": "robust",
-    "seg2_boundary": "first_stop",
+    "seg2_boundary": "slowest",
     "features": "directions",
     "offsets": "mean",
     "amplitude": False,

@@ -121,6 +121,8 @@ def test_watch_fast_writes_the_events_of_the_pipeline_pushed_directly(
     assert emitted == sorted(emitted)
     assert len(r.stdout.splitlines()) == len(got)  # one printed line per event
     assert f"{len(got)} events written to {out}" in r.stderr
+    # A model of the default SEG-2 rule says how late its segments come, and what to use.
+    assert model.seg2_boundary == "slowest" and "--seg2-boundary first_stop" in r.stderr
 
 
 def test_watch_checks_its_output_and_source_first(

@@ -286,14 +286,15 @@ PARAMETERS: tuple[Parameter, ...] = (
     ),
     _P(
         "seg2_boundary",
-        "first_stop",
+        "slowest",
         options(SEG2_BOUNDARIES),
         "where SEG-2 cuts after a movement run: the slowest frame of the rest before the "
         "next run, or the run's first stop (first local minimum of the squared speed, or "
         "rest), the same whether or not another run follows",
         "--seg2-boundary",
         "where SEG-2 cuts after a run: the slowest frame of the following rest, or the "
-        "run's first stop (lets the online segmenter close each segment at once)",
+        "run's first stop (lets the online segmenter close each segment at once: "
+        "for models used live)",
         paper="slowest",
         choices=SEG2_BOUNDARIES,
     ),

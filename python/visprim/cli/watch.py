@@ -286,6 +286,14 @@ def run(args: argparse.Namespace) -> int:
         adonis = LiveAdonis(model, dt=args.dt)
     source, what = open_source(args, model)
     print(f"watching {what}; Ctrl-C ends", file=sys.stderr, flush=True)
+    if getattr(model, "seg2_boundary", "slowest") != "first_stop":
+        print(
+            "note: this model cuts at the slowest frame of each pause, so a segment is "
+            "reported only when the next stroke starts (or the rest timeout); a model "
+            "learned with --seg2-boundary first_stop reports each one 4 frames after it ends",
+            file=sys.stderr,
+            flush=True,
+        )
     log = EventLog(out) if out is not None else None
     status = 0
     stopped = ""
