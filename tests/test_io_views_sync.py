@@ -37,10 +37,33 @@ def _cameras() -> list[Camera]:
     return cams
 
 
+#: Still BlazePose points the arms' FK does not give (m, body frame: x forward, y left,
+#: z up): left index, right index, and the left one's position (the right one mirrored).
+STILL_PAIRS = (
+    (1, 4, (0.08, 0.03, 1.62)),  # eyes (inner)
+    (2, 5, (0.08, 0.04, 1.63)),
+    (3, 6, (0.08, 0.05, 1.63)),
+    (7, 8, (0.0, 0.08, 1.60)),  # ears
+    (9, 10, (0.09, 0.025, 1.55)),  # mouth
+    (25, 26, (0.02, 0.10, 0.50)),  # knees
+    (27, 28, (0.0, 0.11, 0.08)),  # ankles
+    (29, 30, (-0.05, 0.11, 0.04)),  # heels
+    (31, 32, (0.15, 0.12, 0.02)),  # toes
+)
+
+
 def _skeleton(n: int) -> np.ndarray:
-    """(n, 33, 3) BlazePose points (m) of both arms moving (visprim's FK), torso still."""
+    """(n, 33, 3) BlazePose points (m) of both arms moving (visprim's FK), the rest still
+    and distinct (every left/right pair is two different points)."""
     kp = body_keypoints(arm_angles_truth(n, RATE / 8), arm_angles_truth(n, RATE / 8, 1.3))
-    return to_blazepose(kp)
+    pts = to_blazepose(kp)
+    pts[:, 0] = (0.1, 0.0, 1.58)  # nose
+    for left, right, (x, y, z) in STILL_PAIRS:
+        pts[:, left] = (x, y, z)
+        pts[:, right] = (x, -y, z)
+    pts[:, 21] = pts[:, 15] + (pts[:, 15] - pts[:, 13]) * 0.2  # thumbs: along the forearm
+    pts[:, 22] = pts[:, 16] + (pts[:, 16] - pts[:, 14]) * 0.2
+    return pts
 
 
 def _poses(
@@ -149,3 +172,23 @@ def test_a_shifted_view_of_the_shared_clip_is_found(shared_data, tmp_path, monke
     )  # fmt: skip
     shifted, _ = estimate_offsets([poses[0], cut, *poses[2:]], cams, max_offset=12, pairs=pairs)
     assert shifted == [base[0], base[1] - 3, base[2], base[3]], (base, shifted)
+
+
+def test_left_right_exchanges_of_the_fk_skeleton_are_put_back():
+    """One view mirrored (every left/right pair exchanged) in frames 10-29, another with one
+    arm's labels exchanged in frame 40: exactly those are found, and the points come back."""
+    cams, poses, truth = _poses([0, 0, 0, 0], frames=50, noise=0.5, seed=4)
+    pairs = SIDE_PAIRS["blazepose33"]
+    arm = [(11, 12), (13, 14), (15, 16), (17, 18), (19, 20), (21, 22)]
+    for view, frames, which in ((3, slice(10, 30), pairs), (1, slice(40, 41), arm)):
+        img = poses[view].image
+        for a, b in which:
+            img[frames, [a, b]] = img[frames, [b, a]]
+    mv = triangulate_poses(poses, cams, max_reprojection=None)
+    expected = np.zeros((50, 4), dtype=int)
+    expected[10:30, 3] = 16
+    expected[40, 1] = 6
+    np.testing.assert_array_equal(mv.swapped, expected)
+    assert np.nanmax(np.linalg.norm(mv.points - truth, axis=-1)) < 0.005
+    plain = triangulate_poses(poses, cams, swaps=False, max_reprojection=None)
+    assert np.nanmax(np.linalg.norm(plain.points[10:30, 15] - truth[10:30, 15], axis=-1)) > 0.05

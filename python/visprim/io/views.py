@@ -73,8 +73,8 @@ class MultiView:
     and the reprojected point (NaN where the view was not used); ``views_used`` (T, K);
     ``poses`` per view; ``cameras`` matched to the views; ``swapped`` (T, V) left/right
     pairs exchanged per frame and view; ``rejected`` (T, K, V) outlier observations;
-    ``pixels`` (T, K, V, 2) and ``confidence`` (T, K, V) the observations triangulated (the
-    views' frames matched by the offsets ``meta["offsets"]``, before the left/right check).
+    ``pixels`` (T, K, V, 2) and ``confidence`` (T, K, V) the observations (the views' frames
+    matched by the offsets ``meta["offsets"]``; pixels after the left/right check).
     """
 
     points: NDArray[np.float64]
@@ -124,7 +124,9 @@ class Triangulation:
     ``reprojection`` (T, K, V) px between each used observation and the reprojected point
     (NaN where the view was not used); ``views_used`` (T, K); ``swapped`` (T, V) number of
     left/right pairs exchanged in each view and frame; ``rejected`` (T, K, V) observations
-    left out as outliers (reprojection above ``max_reprojection``).
+    left out as outliers (reprojection above ``max_reprojection``); ``pixels`` (T, K, V, 2)
+    and ``confidence`` (T, K, V) the observations after the left/right check (what the
+    points were triangulated from).
     """
 
     points: NDArray[np.float64]
@@ -132,6 +134,8 @@ class Triangulation:
     views_used: NDArray[np.int64]
     swapped: NDArray[np.int64]
     rejected: NDArray[np.bool_]
+    pixels: NDArray[np.float64]
+    confidence: NDArray[np.float64]
 
 
 def _dlt(
@@ -278,6 +282,7 @@ def triangulate_keypoints(
     swaps = resolve_swaps(cameras, pixels, norm, weights, pairs, min_views=min_views)
     if pairs:
         pixels = _apply_swaps(pixels, swaps, pairs)
+        confidence = _apply_swaps(confidence, swaps, pairs)
         norm = _apply_swaps(norm, swaps, pairs)
         weights = _apply_swaps(weights, swaps, pairs)
     proj = np.ascontiguousarray(np.stack([c.projection for c in cameras]), dtype=np.float64)
@@ -310,6 +315,8 @@ def triangulate_keypoints(
         views_used=used.sum(axis=-1).astype(np.int64),
         swapped=swaps.sum(axis=1).astype(np.int64),
         rejected=rejected,
+        pixels=pixels,
+        confidence=confidence,
     )
 
 
@@ -462,11 +469,11 @@ def estimate_offsets(
             found[(a, b)] = (best, res[best], res[0])
     design = np.zeros((len(found), v - 1))
     target = np.zeros(len(found))
-    for row, ((a, b), (d, _, _)) in enumerate(found.items()):
+    for row, ((a, b), (off, _, _)) in enumerate(found.items()):
         if a > 0:
             design[row, a - 1] = -1.0
         design[row, b - 1] = 1.0
-        target[row] = d
+        target[row] = off
     sol = np.linalg.lstsq(design, target, rcond=None)[0] if v > 1 else np.zeros(0)
     offsets = [0] + [int(np.rint(x)) for x in sol]
     worst = max(
@@ -585,8 +592,8 @@ def triangulate_poses(
         layout=layout,
         swapped=tri.swapped,
         rejected=tri.rejected,
-        pixels=pixels,
-        confidence=conf,
+        pixels=tri.pixels,
+        confidence=tri.confidence,
         meta=meta,
     )
 
