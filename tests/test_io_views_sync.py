@@ -154,6 +154,7 @@ def test_a_shifted_view_of_the_shared_clip_is_found(shared_data, tmp_path, monke
     """The shared clip with cam02's first 3 frames dropped: the estimate moves by exactly 3
     frames for cam02 and not for the others (the clip's own estimate is not 0 everywhere:
     MediaPipe's keypoints disagree between views; see docs/video.rst)."""
+    from visprim.io import read_views
     from visprim.io.calibration import read_calibration
     from visprim.io.video_pose import video_poses
 
@@ -172,6 +173,11 @@ def test_a_shifted_view_of_the_shared_clip_is_found(shared_data, tmp_path, monke
     )  # fmt: skip
     shifted, _ = estimate_offsets([poses[0], cut, *poses[2:]], cams, max_offset=12, pairs=pairs)
     assert shifted == [base[0], base[1] - 3, base[2], base[3]], (base, shifted)
+    views = [folder / f"cam0{i}.mp4" for i in (1, 2, 3, 4)]
+    trial = read_views(
+        views, folder / "Calib.qca.txt", arm="both", max_frames=60, sync=True, min_duration=0.1
+    )  # the poses come from the cache written above
+    assert trial.meta["offsets"] == base and trial.meta["sync"]["offsets"] == base
 
 
 def test_left_right_exchanges_of_the_fk_skeleton_are_put_back():

@@ -542,9 +542,10 @@ TRIANGULATION_MAX_REPROJECTION_PX: float = 15.0
 #: Time alignment of the views (``sync`` of :func:`visprim.io.read_views`): False takes the
 #: videos as frame-synchronised (frame i of each is the same instant); True estimates each
 #: view's whole-frame offset from the data (:func:`visprim.io.views.estimate_offsets`). Off by
-#: default: on the shared, hardware-synchronised Pose2Sim clip the estimate is not consistent
-#: between camera pairs and does not improve the reference (benches/video_accuracy.py,
-#: docs/video.rst); turn it on for cameras started by hand.
+#: default, by measurement (benches/video_accuracy.py, docs/video.rst): on the shared,
+#: hardware-synchronised Pose2Sim clip the pairs of views disagree on the offsets (by 2
+#: frames), and applying them neither lowers the reprojection error consistently nor moves
+#: any single camera's agreement with the reference; turn it on for cameras started by hand.
 VIEWS_SYNC: bool = False
 #: The largest offset (s) ``sync=True`` searches, either way (at 60 fps, 12 frames).
 VIEWS_SYNC_MAX_OFFSET_S: float = 0.2
