@@ -144,6 +144,10 @@ def test_still_scene_keeps_zero_and_given_offsets_are_used():
         triangulate_poses(poses, cams, sync=[0, 1])
     with pytest.raises(ValueError, match="too few"):
         estimate_offsets(poses, cams, max_offset=25)
+    # sync=True on a clip shorter than the declared search: the search shrinks to fit
+    cams, poses, _ = _poses([0, 1, 0, -2], frames=12)
+    mv = triangulate_poses(poses, cams, sync=True, max_reprojection=None)
+    assert mv.meta["offsets"] == [0, 1, 0, -2] and mv.meta["sync"]["max_offset"] == 5
 
 
 @pytest.mark.skipif(

@@ -237,8 +237,8 @@ class MediaPipePose:
             self._options["min_detection_confidence"],
             self._options["min_tracking_confidence"],
             self.max_side,
-            self._options["smooth_landmarks"],
-            self._options["static_image_mode"],
+            bool(self._options["smooth_landmarks"]),
+            bool(self._options["static_image_mode"]),
         )
 
     def reset(self) -> None:

@@ -21,8 +21,8 @@
 
 By default the videos are taken as frame-synchronised (frame i of each is the same instant);
 ``sync=True`` estimates each view's whole-frame offset from the data instead
-(:func:`estimate_offsets`: per pair of views, the offset that minimises the median
-epipolar distance of their keypoints; then the offsets that best agree with all pairs), and
+(:func:`estimate_offsets`: per pair of views, the offset that minimises the epipolar
+distance of their keypoints; then the offsets that best agree with all pairs), and
 ``sync=[0, 2, ...]`` gives known offsets. The trial's times are the first view's clock, over
 the frames every view has.
 """
@@ -505,9 +505,10 @@ def _offsets(
         rates = [float(q.meta.get("rate") or 0.0) for q in poses]
         if any(abs(r - rate) > 1e-3 * rate for r in rates):
             raise ValueError(f"sync=True needs one frame rate for every view, got {rates}")
-        return estimate_offsets(
-            poses, cameras, max_offset=int(round(VIEWS_SYNC_MAX_OFFSET_S * rate)), **options
-        )
+        n = min(q.times.shape[0] for q in poses)
+        # A short clip searches what it can: each candidate needs 2 frames every view has.
+        reach = min(int(round(VIEWS_SYNC_MAX_OFFSET_S * rate)), max((n - 2) // 2, 0))
+        return estimate_offsets(poses, cameras, max_offset=reach, **options)
     offs = [int(o) for o in sync]
     if len(offs) != v or any(isinstance(o, bool) for o in sync):
         raise ValueError(f"sync: one whole-frame offset per view ({v}), got {list(sync)!r}")
@@ -531,7 +532,8 @@ def triangulate_poses(
 
     ``sync``: False (default :data:`visprim.params.VIEWS_SYNC`) takes frame i of every view
     as the same instant; True estimates each view's whole-frame offset against the first
-    view within ±:data:`visprim.params.VIEWS_SYNC_MAX_OFFSET_S` (:func:`estimate_offsets`);
+    view within ±:data:`visprim.params.VIEWS_SYNC_MAX_OFFSET_S` (less in a clip too short
+    for it: ``meta["sync"]["max_offset"]`` says how far; :func:`estimate_offsets`);
     a sequence gives the offsets (frames, view v's frame ``i + o[v]`` ↔ the first view's
     frame i; relative to the first). The times are the first view's clock.
     """
