@@ -337,6 +337,19 @@ def report(folder: Path, variants: bool = False) -> tuple[str, dict[str, float]]
             f"not used); with it the default's median is {np.nanmedian(shifted.reprojection):.1f} "
             f"px used, {np.nanmedian(all_views_error(shifted)):.1f} px over all views."
         )
+        equal = [
+            dataclasses.replace(q, confidence=(q.confidence >= MIN_CONFIDENCE).astype(float))
+            for q in poses
+        ]
+        flat = triangulate_poses(equal, cameras)
+        conf_used = np.where(np.isfinite(robust.reprojection), robust.confidence, np.nan)
+        print(
+            "\nconfidence weighting (the DLT weight of an observation is its confidence): with "
+            f"equal weights instead, the default's median is {np.nanmedian(flat.reprojection):.1f}"
+            f" px used, {np.nanmedian(all_views_error(flat)):.1f} px over all views; the "
+            f"confidences of the observations used: median {np.nanmedian(conf_used):.2f}, "
+            f"10th pct {np.nanpercentile(conf_used, 10):.2f}."
+        )
         if variants:
             from visprim.io.video_pose import MediaPipePose
 
