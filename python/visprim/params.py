@@ -558,6 +558,17 @@ RATE_OPTIONS: Mapping[str, RateOption] = {
 #: more than ``min_views`` remain). Pose2Sim's default threshold, for 1080p views.
 TRIANGULATION_MAX_REPROJECTION_PX: float = 15.0
 
+#: Time alignment of the views (``sync`` of :func:`visprim.io.read_views`): False takes the
+#: videos as frame-synchronised (frame i of each is the same instant); True estimates each
+#: view's whole-frame offset from the data (:func:`visprim.io.views.estimate_offsets`). Off by
+#: default, by measurement (benches/video_accuracy.py, docs/video.rst): on the shared,
+#: hardware-synchronised Pose2Sim clip the pairs of views disagree on the offsets (by 2
+#: frames), and applying them neither lowers the reprojection error consistently nor moves
+#: any single camera's agreement with the reference; turn it on for cameras started by hand.
+VIEWS_SYNC: bool = False
+#: The largest offset (s) ``sync=True`` searches, either way (at 60 fps, 12 frames).
+VIEWS_SYNC_MAX_OFFSET_S: float = 0.2
+
 #: Zero-phase low-pass cutoff (Hz) of video keypoints before they become a trial
 #: (``lowpass_hz`` of :func:`visprim.io.keypoints.trial_pieces_from_keypoints`; None: no
 #: smoothing). Chosen by ``benches/video_accuracy.py`` (single camera against the four-view

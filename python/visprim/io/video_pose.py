@@ -190,6 +190,8 @@ class MediaPipePose:
     min_detection_confidence, min_tracking_confidence : MediaPipe's thresholds (0.5)
     max_side : frames whose larger side exceeds this many pixels are downsized to it before
         MediaPipe (None: full resolution)
+    smooth_landmarks, static_image_mode : MediaPipe's options (default True, False: its
+        landmark filter on, tracking from frame to frame; the benchmark compares the others)
     """
 
     layout = "blazepose33"
@@ -200,6 +202,8 @@ class MediaPipePose:
         min_detection_confidence: float = 0.5,
         min_tracking_confidence: float = 0.5,
         max_side: int | None = None,
+        smooth_landmarks: bool = True,
+        static_image_mode: bool = False,
     ) -> None:
         import mediapipe as mp  # the video extra
 
@@ -208,9 +212,9 @@ class MediaPipePose:
         self._mp = mp
         self.max_side = None if max_side is None else int(max_side)
         self._options = {
-            "static_image_mode": False,
+            "static_image_mode": bool(static_image_mode),
             "model_complexity": 1,  # in the wheel; 0 and 2 download at run time
-            "smooth_landmarks": True,
+            "smooth_landmarks": bool(smooth_landmarks),
             "enable_segmentation": False,
             "min_detection_confidence": float(min_detection_confidence),
             "min_tracking_confidence": float(min_tracking_confidence),
@@ -233,6 +237,8 @@ class MediaPipePose:
             self._options["min_detection_confidence"],
             self._options["min_tracking_confidence"],
             self.max_side,
+            bool(self._options["smooth_landmarks"]),
+            bool(self._options["static_image_mode"]),
         )
 
     def reset(self) -> None:

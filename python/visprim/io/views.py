@@ -19,8 +19,12 @@
    as any keypoints do (:func:`visprim.io.keypoints.trial_pieces_from_keypoints`); points seen
    by too few views are gaps (short ones filled, long ones split or refused).
 
-The videos must be frame-synchronised (frame i of each is the same instant); the trial's
-times are the first view's clock, over the frames every view has.
+By default the videos are taken as frame-synchronised (frame i of each is the same instant);
+``sync=True`` estimates each view's whole-frame offset from the data instead
+(:func:`estimate_offsets`: per pair of views, the offset that minimises the epipolar
+distance of their keypoints; then the offsets that best agree with all pairs), and
+``sync=[0, 2, ...]`` gives known offsets. The trial's times are the first view's clock, over
+the frames every view has.
 """
 
 from __future__ import annotations
@@ -38,15 +42,22 @@ from visprim.io.calibration import Camera, read_calibration
 from visprim.io.errors import GapError, ReadError
 from visprim.io.keypoints import read_error, trial_pieces_from_keypoints
 from visprim.io.video_pose import PoseEstimator, VideoPoses, video_poses
-from visprim.params import TRIANGULATION_MAX_REPROJECTION_PX, VIDEO_LOWPASS_HZ
+from visprim.params import (
+    TRIANGULATION_MAX_REPROJECTION_PX,
+    VIDEO_LOWPASS_HZ,
+    VIEWS_SYNC,
+    VIEWS_SYNC_MAX_OFFSET_S,
+)
 from visprim.trial import Trial
 
 __all__ = [
     "SIDE_PAIRS",
     "MultiView",
+    "Sync",
     "Triangulation",
     "read_views",
     "read_views_pieces",
+    "estimate_offsets",
     "triangulate_keypoints",
     "triangulate_poses",
     "triangulate_views",
@@ -61,7 +72,9 @@ class MultiView:
     ``times`` (T,) s; ``reprojection`` (T, K, V) pixel distance between each used observation
     and the reprojected point (NaN where the view was not used); ``views_used`` (T, K);
     ``poses`` per view; ``cameras`` matched to the views; ``swapped`` (T, V) left/right
-    pairs exchanged per frame and view; ``rejected`` (T, K, V) outlier observations.
+    pairs exchanged per frame and view; ``rejected`` (T, K, V) outlier observations;
+    ``pixels`` (T, K, V, 2) and ``confidence`` (T, K, V) the observations (the views' frames
+    matched by the offsets ``meta["offsets"]``; pixels after the left/right check).
     """
 
     points: NDArray[np.float64]
@@ -73,6 +86,8 @@ class MultiView:
     layout: str
     swapped: NDArray[np.int64]
     rejected: NDArray[np.bool_]
+    pixels: NDArray[np.float64]
+    confidence: NDArray[np.float64]
     meta: dict[str, Any] = field(default_factory=dict)
 
 
@@ -109,7 +124,9 @@ class Triangulation:
     ``reprojection`` (T, K, V) px between each used observation and the reprojected point
     (NaN where the view was not used); ``views_used`` (T, K); ``swapped`` (T, V) number of
     left/right pairs exchanged in each view and frame; ``rejected`` (T, K, V) observations
-    left out as outliers (reprojection above ``max_reprojection``).
+    left out as outliers (reprojection above ``max_reprojection``); ``pixels`` (T, K, V, 2)
+    and ``confidence`` (T, K, V) the observations after the left/right check (what the
+    points were triangulated from).
     """
 
     points: NDArray[np.float64]
@@ -117,6 +134,8 @@ class Triangulation:
     views_used: NDArray[np.int64]
     swapped: NDArray[np.int64]
     rejected: NDArray[np.bool_]
+    pixels: NDArray[np.float64]
+    confidence: NDArray[np.float64]
 
 
 def _dlt(
@@ -263,6 +282,7 @@ def triangulate_keypoints(
     swaps = resolve_swaps(cameras, pixels, norm, weights, pairs, min_views=min_views)
     if pairs:
         pixels = _apply_swaps(pixels, swaps, pairs)
+        confidence = _apply_swaps(confidence, swaps, pairs)
         norm = _apply_swaps(norm, swaps, pairs)
         weights = _apply_swaps(weights, swaps, pairs)
     proj = np.ascontiguousarray(np.stack([c.projection for c in cameras]), dtype=np.float64)
@@ -295,7 +315,204 @@ def triangulate_keypoints(
         views_used=used.sum(axis=-1).astype(np.int64),
         swapped=swaps.sum(axis=1).astype(np.int64),
         rejected=rejected,
+        pixels=pixels,
+        confidence=confidence,
     )
+
+
+#: ``sync=`` of :func:`triangulate_poses`: False / None (frame-synchronised), True (estimate
+#: the offsets), or each view's known offset in frames.
+Sync = bool | None | Sequence[int]
+
+
+def _common_frames(poses: Sequence[VideoPoses], offsets: Sequence[int]) -> tuple[int, int]:
+    """First and one-past-last frame of the first view that every view has once view v's
+    frame ``i + offsets[v]`` is matched with the first view's frame i."""
+    start = max(0, *(-o for o in offsets))
+    stop = min(q.times.shape[0] - o for q, o in zip(poses, offsets, strict=True))
+    if stop - start < 2:
+        raise ValueError(f"the views share fewer than 2 frames with the offsets {list(offsets)}")
+    return start, stop
+
+
+def _stack_views(
+    poses: Sequence[VideoPoses], offsets: Sequence[int], k: int, start: int, stop: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Pixels (T, K, V, 2) and confidences (T, K, V; 0 where no person) of the first view's
+    frames ``start:stop``, view v's frames shifted by ``offsets[v]``."""
+    spans = [slice(start + o, stop + o) for o in offsets]
+    pixels = np.stack([q.image[w, :k] for q, w in zip(poses, spans, strict=True)], axis=2)
+    conf = np.stack(
+        [
+            np.where(q.found[w, None], q.confidence[w, :k], 0.0)
+            for q, w in zip(poses, spans, strict=True)
+        ],
+        axis=2,
+    )
+    return pixels, conf
+
+
+def _skew(t: NDArray[np.float64]) -> NDArray[np.float64]:
+    return np.array([[0.0, -t[2], t[1]], [t[2], 0.0, -t[0]], [-t[1], t[0], 0.0]])
+
+
+def epipolar_distance(
+    a: Camera, b: Camera, norm_a: NDArray[np.float64], norm_b: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Symmetric epipolar distance (px) of matched observations (..., 2) in undistorted
+    normalised coordinates of cameras ``a`` and ``b``: the mean of each point's distance to
+    the other's epipolar line, in its own camera's pixels (mean focal length). NaN where
+    either is missing. Zero for a correct calibration and simultaneous, exact observations,
+    whatever the 3-D point."""
+    rel = b.R @ a.R.T
+    e = _skew(b.t - rel @ a.t) @ rel  # x_b^T E x_a = 0
+    ha = np.concatenate([norm_a, np.ones(norm_a.shape[:-1] + (1,))], axis=-1)
+    hb = np.concatenate([norm_b, np.ones(norm_b.shape[:-1] + (1,))], axis=-1)
+    line_b = ha @ e.T  # in b's image
+    line_a = hb @ e  # in a's image
+    num = np.abs(np.sum(hb * line_b, axis=-1))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        db = num / np.linalg.norm(line_b[..., :2], axis=-1) * (b.K[0, 0] + b.K[1, 1]) / 2
+        da = num / np.linalg.norm(line_a[..., :2], axis=-1) * (a.K[0, 0] + a.K[1, 1]) / 2
+    return (da + db) / 2
+
+
+def _pair_distance(
+    a: Camera,
+    b: Camera,
+    norm_a: NDArray[np.float64],
+    norm_b: NDArray[np.float64],
+    pairs: Sequence[tuple[int, int]],
+) -> NDArray[np.float64]:
+    """:func:`epipolar_distance` (T, K) of two views' keypoints (T, K, 2), each left/right
+    pair of ``pairs`` taken in the assignment (as labelled, or exchanged) that fits better
+    in each frame, so that an estimator's left/right exchange does not count."""
+    d = epipolar_distance(a, b, norm_a, norm_b)
+    if pairs:
+        left = [x for x, _ in pairs]
+        right = [y for _, y in pairs]
+        crossed_l = epipolar_distance(a, b, norm_a[:, left], norm_b[:, right])
+        crossed_r = epipolar_distance(a, b, norm_a[:, right], norm_b[:, left])
+        same = d[:, left] + d[:, right]
+        swap = (crossed_l + crossed_r) < same
+        d[:, left] = np.where(swap, crossed_l, d[:, left])
+        d[:, right] = np.where(swap, crossed_r, d[:, right])
+    return d
+
+
+def _score(d: NDArray[np.float64]) -> float:
+    """Mean over keypoints of each keypoint's median (over frames) of ``d`` (T, K): robust
+    to bad frames, and every keypoint counts (a median over all observations would be
+    decided by the keypoints that do not move, which no offset changes)."""
+    ok = np.isfinite(d).any(axis=0)
+    if not ok.any():
+        return float("inf")
+    return float(np.mean(np.nanmedian(d[:, ok], axis=0)))
+
+
+def estimate_offsets(
+    poses: Sequence[VideoPoses],
+    cameras: Sequence[Camera],
+    *,
+    max_offset: int,
+    min_confidence: float = 0.5,
+    pairs: Sequence[tuple[int, int]] = (),
+) -> tuple[list[int], dict[str, Any]]:
+    """Whole-frame time offsets of the views, from the data: view v's frame ``i + o[v]`` is
+    the instant of the first view's frame i (``o[0] = 0``).
+
+    1. Every pair of views (a, b): the offset ``d_ab`` in ``[−max_offset, max_offset]`` of b
+       against a that minimises the symmetric epipolar distance
+       (:func:`epipolar_distance`, px; per keypoint the median over frames, then the mean
+       over keypoints) of their confident keypoints (confidence ≥
+       ``min_confidence`` in both; left/right pairs in the better assignment), over the
+       first view's frames that every candidate covers, so that all candidates are scored on
+       the same instants. Two views at a time: a third view's error cannot pull it, and the
+       calibration alone decides (any motion, no 3-D model). Ties go to the smaller offset.
+    2. The offsets: least squares ``o_b − o_a ≈ d_ab`` over all pairs with ``o_0 = 0``,
+       rounded. With 2 views that is ``d_01``.
+
+    The record reports every pair's offset, its distance there and at 0, and the
+    inconsistency: the largest ``|o_b − o_a − d_ab|`` (frames; 0 when the pairs agree, as
+    for a true shift of exact keypoints). Motion is what makes offsets visible; on a still
+    scene every offset scores alike and 0 is kept. Cost: ``V(V−1)/2 · (2·max_offset + 1)``
+    median distances over the clip.
+    """
+    v = len(poses)
+    if max_offset < 0:
+        raise ValueError(f"max_offset must be >= 0 frames, got {max_offset!r}")
+    n = min(q.times.shape[0] for q in poses)
+    if n - 2 * max_offset < 2:
+        raise ValueError(
+            f"sync: {n} frames are too few to search offsets of up to {max_offset} frames"
+        )
+    k = min(q.image.shape[1] for q in poses)
+    norms = [
+        np.where(
+            (q.found[:n, None] & (q.confidence[:n, :k] >= min_confidence))[..., None],
+            c.undistort(q.image[:n, :k]),
+            np.nan,
+        )
+        for q, c in zip(poses, cameras, strict=True)
+    ]
+    lo, hi = max_offset, n - max_offset
+    found: dict[tuple[int, int], tuple[int, float, float]] = {}
+    for a in range(v):
+        for b in range(a + 1, v):
+            res = {}
+            for s in range(-max_offset, max_offset + 1):
+                d = _pair_distance(
+                    cameras[a], cameras[b], norms[a][lo:hi], norms[b][lo + s : hi + s], pairs
+                )
+                res[s] = _score(d)
+            best = min(res, key=lambda s: (res[s], abs(s)))
+            found[(a, b)] = (best, res[best], res[0])
+    design = np.zeros((len(found), v - 1))
+    target = np.zeros(len(found))
+    for row, ((a, b), (off, _, _)) in enumerate(found.items()):
+        if a > 0:
+            design[row, a - 1] = -1.0
+        design[row, b - 1] = 1.0
+        target[row] = off
+    sol = np.linalg.lstsq(design, target, rcond=None)[0] if v > 1 else np.zeros(0)
+    offsets = [0] + [int(np.rint(x)) for x in sol]
+    worst = max(
+        (abs(offsets[b] - offsets[a] - d) for (a, b), (d, _, _) in found.items()), default=0
+    )
+    record = {
+        "offsets": list(offsets),
+        "max_offset": int(max_offset),
+        "pairs": {
+            f"{a}-{b}": {"offset": d, "distance_px": at, "distance_px_at_zero": zero}
+            for (a, b), (d, at, zero) in found.items()
+        },
+        "inconsistency_frames": int(worst),
+    }
+    return offsets, record
+
+
+def _offsets(
+    sync: Sync, poses: Sequence[VideoPoses], cameras: Sequence[Camera], **options: Any
+) -> tuple[list[int], dict[str, Any] | None]:
+    """The frame offsets ``sync`` asks for (see :func:`triangulate_poses`)."""
+    v = len(poses)
+    if sync is None or sync is False:
+        return [0] * v, None
+    if sync is True:
+        rate = float(poses[0].meta.get("rate") or 0.0)
+        if not rate > 0:
+            raise ValueError("sync=True needs the views' frame rate (meta['rate'])")
+        rates = [float(q.meta.get("rate") or 0.0) for q in poses]
+        if any(abs(r - rate) > 1e-3 * rate for r in rates):
+            raise ValueError(f"sync=True needs one frame rate for every view, got {rates}")
+        n = min(q.times.shape[0] for q in poses)
+        # A short clip searches what it can: each candidate needs 2 frames every view has.
+        reach = min(int(round(VIEWS_SYNC_MAX_OFFSET_S * rate)), max((n - 2) // 2, 0))
+        return estimate_offsets(poses, cameras, max_offset=reach, **options)
+    offs = [int(o) for o in sync]
+    if len(offs) != v or any(isinstance(o, bool) for o in sync):
+        raise ValueError(f"sync: one whole-frame offset per view ({v}), got {list(sync)!r}")
+    return [o - offs[0] for o in offs], None
 
 
 def triangulate_poses(
@@ -307,10 +524,19 @@ def triangulate_poses(
     swaps: bool = True,
     max_reprojection: float | None = TRIANGULATION_MAX_REPROJECTION_PX,
     views: Sequence[str] = (),
+    sync: Sync = VIEWS_SYNC,
 ) -> MultiView:
-    """Triangulate the poses of synchronised views (one :class:`VideoPoses` per camera, in
-    the cameras' order) over the frames every view has; ``swaps`` checks left/right
-    exchanges with the layout's :data:`SIDE_PAIRS`."""
+    """Triangulate the poses of the views (one :class:`VideoPoses` per camera, in the
+    cameras' order) over the frames every view has; ``swaps`` checks left/right exchanges
+    with the layout's :data:`SIDE_PAIRS`.
+
+    ``sync``: False (default :data:`visprim.params.VIEWS_SYNC`) takes frame i of every view
+    as the same instant; True estimates each view's whole-frame offset against the first
+    view within ±:data:`visprim.params.VIEWS_SYNC_MAX_OFFSET_S` (less in a clip too short
+    for it: ``meta["sync"]["max_offset"]`` says how far; :func:`estimate_offsets`);
+    a sequence gives the offsets (frames, view v's frame ``i + o[v]`` ↔ the first view's
+    frame i; relative to the first). The times are the first view's clock.
+    """
     if len(poses) != len(cameras) or len(poses) < 2:
         raise ValueError(
             f"need one pose series per camera, at least 2; got {len(poses)} / {len(cameras)}"
@@ -319,11 +545,14 @@ def triangulate_poses(
     if len(layouts) != 1:
         raise ValueError(f"the views have different keypoint layouts: {sorted(layouts)}")
     layout = layouts.pop()
-    n = min(q.times.shape[0] for q in poses)
     k = min(q.image.shape[1] for q in poses)
-    pixels = np.stack([q.image[:n, :k] for q in poses], axis=2)
-    conf = np.stack([np.where(q.found[:n, None], q.confidence[:n, :k], 0.0) for q in poses], axis=2)
     pairs = [(a, b) for a, b in SIDE_PAIRS.get(layout, ()) if a < k and b < k] if swaps else []
+    offsets, sync_record = _offsets(
+        sync, poses, cameras, min_confidence=min_confidence, pairs=pairs
+    )
+    start, stop = _common_frames(poses, offsets)
+    pixels, conf = _stack_views(poses, offsets, k, start, stop)
+    n = stop - start
     tri = triangulate_keypoints(
         cameras,
         pixels,
@@ -339,7 +568,11 @@ def triangulate_poses(
         "views": list(views),
         "cameras": [c.name for c in cameras],
         "frames": n,
-        "person_found": [float(q.found[:n].mean()) for q in poses],
+        "offsets": list(offsets),
+        "sync": sync_record,
+        "person_found": [
+            float(q.found[start + o : stop + o].mean()) for q, o in zip(poses, offsets, strict=True)
+        ],
         "reprojection_px_median": float(np.nanmedian(reproj))
         if np.isfinite(reproj).any()
         else None,
@@ -353,7 +586,7 @@ def triangulate_poses(
     }
     return MultiView(
         points=tri.points,
-        times=poses[0].times[:n],
+        times=poses[0].times[start:stop],
         reprojection=reproj,
         views_used=tri.views_used,
         poses=list(poses),
@@ -361,6 +594,8 @@ def triangulate_poses(
         layout=layout,
         swapped=tri.swapped,
         rejected=tri.rejected,
+        pixels=tri.pixels,
+        confidence=tri.confidence,
         meta=meta,
     )
 
@@ -376,9 +611,10 @@ def triangulate_views(
     max_reprojection: float | None = TRIANGULATION_MAX_REPROJECTION_PX,
     max_frames: int | None = None,
     cache: bool = True,
+    sync: Sync = VIEWS_SYNC,
 ) -> MultiView:
-    """Pose of every view, triangulated (see the module docstring and
-    :func:`triangulate_keypoints`)."""
+    """Pose of every view, triangulated (see the module docstring,
+    :func:`triangulate_poses` for ``sync`` and :func:`triangulate_keypoints`)."""
     paths = [Path(v) for v in videos]
     if len(paths) < 2:
         raise ValueError(f"read_views needs at least 2 videos, got {len(paths)}")
@@ -397,6 +633,7 @@ def triangulate_views(
         swaps=swaps,
         max_reprojection=max_reprojection,
         views=[str(p) for p in paths],
+        sync=sync,
     )
 
 
@@ -418,11 +655,14 @@ def read_views_pieces(
     swaps: bool = True,
     max_reprojection: float | None = TRIANGULATION_MAX_REPROJECTION_PX,
     lowpass_hz: float | None = VIDEO_LOWPASS_HZ,
+    sync: Sync = VIEWS_SYNC,
 ) -> list[Trial]:
     """Trials from several calibrated views (several when long gaps split them).
 
     ``calibration``: a Qualisys ``.qca.txt`` or Pose2Sim/OpenCV ``.toml`` file, or cameras;
-    ``swaps``, ``max_reprojection`` (px): see :func:`triangulate_keypoints`; ``lowpass_hz``:
+    ``swaps``, ``max_reprojection`` (px): see :func:`triangulate_keypoints`; ``sync``: the
+    views' time alignment (default :data:`visprim.params.VIEWS_SYNC`: frame-synchronised;
+    True estimates whole-frame offsets; see :func:`triangulate_poses`); ``lowpass_hz``:
     smoothing of the 3-D keypoints (default :data:`visprim.params.VIDEO_LOWPASS_HZ`); the
     other options as :func:`visprim.io.read_pieces`.
     """
@@ -436,6 +676,7 @@ def read_views_pieces(
         max_reprojection=max_reprojection,
         max_frames=max_frames,
         cache=cache,
+        sync=sync,
     )
     first = Path(videos[0])
     try:
