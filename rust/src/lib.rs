@@ -33,6 +33,7 @@ pub mod sosfilt_online;
 pub mod triangulate;
 
 pub mod gif;
+pub mod yuv;
 
 pub use error::{Error, Result};
 

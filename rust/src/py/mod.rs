@@ -4,6 +4,7 @@ use pyo3::prelude::*;
 
 mod args;
 mod arrays;
+mod arrow;
 mod dtw;
 mod dtw_online;
 mod errors;
@@ -13,6 +14,7 @@ mod linalg;
 mod signal;
 mod sosfilt_online;
 mod triangulate;
+mod yuv;
 
 /// The compiled extension `visprim._visprim`; its public face is `visprim.kernels`.
 #[pymodule]
@@ -28,6 +30,7 @@ fn _visprim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     front_online::register(m)?;
     triangulate::register(m)?;
     gif::register(m)?;
+    yuv::register(m)?;
     Ok(())
 }
 
