@@ -175,10 +175,13 @@ def _candidates(
     seconds: float,
     settings: Settings | None = None,
     postures: NDArray[np.float64] | None = None,
+    *,
+    family: str | None = None,
 ) -> tuple[list[tuple[Description, float]], Callable[[Description], NDArray[np.float64]]]:
-    """Every description :func:`describe_segments` chooses from, with the squared error of
-    its rebuild (posture included: the stored posture of ``settings`` against the segments'
-    own ``postures``), and the function that rebuilds the segments by one of them."""
+    """Every description :func:`describe_segments` chooses from (those of ``family`` only,
+    if given), with the squared error of its rebuild (posture included: the stored posture
+    of ``settings`` against the segments' own ``postures``), and the function that rebuilds
+    the segments by one of them."""
     from visprim.vectors import amplitude_gains
 
     x = np.asarray(vectors, dtype=np.float64)
@@ -217,6 +220,8 @@ def _candidates(
     q_max = min(DCT_Q_MAX, int(model.n_samples) - 1)
     options += [("nearest+dct", 0, q) for q in range(1, q_max + 1)]
     options += [("residual+dct", m, q) for m in range(1, f) for q in range(1, q_max + 1)]
+    if family is not None:
+        options = [o for o in options if o[0] == family]
     out = []
     for fam, m, q in options:
         numbers = movement_numbers(fam, n_seg, posture, m, q, c)
@@ -253,13 +258,16 @@ def describe_segments(
     none. The rebuilt vectors are posture-relative: add
     ``rebuilt_postures(model, description.settings, postures, rebuilt)``.
     """
-    candidates, rebuild = _candidates(model, vectors, seconds, settings, postures)
     if budget is None:
         fam = family or ("nearest+gain" if model.amplitude else "nearest")
         if fam not in ("nearest", "nearest+gain", "projection"):
             raise ValueError(f"family must be nearest, nearest+gain or projection, got {fam!r}")
-        d = next(d for d, _ in candidates if d.family == fam)
+        candidates, rebuild = _candidates(model, vectors, seconds, settings, postures, family=fam)
+        if not candidates:
+            raise ValueError(f"family {fam!r} needs a model of posture-relative curves")
+        d = candidates[0][0]
         return rebuild(d), d
+    candidates, rebuild = _candidates(model, vectors, seconds, settings, postures)
     fitting = [(err, d.numbers, i) for i, (d, err) in enumerate(candidates)]
     fitting = [c for c in fitting if candidates[c[2]][0].numbers_per_s <= budget * (1 + 1e-12)]
     if not fitting:

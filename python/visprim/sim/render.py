@@ -234,15 +234,32 @@ class Painter:
         fill: RGB = (20, 20, 20),
         box: bool = False,
     ) -> None:
-        """Text on a finished (output-size) image at pixel ``xy``, font ``size`` pixels."""
-        draw = ImageDraw.Draw(image)
-        font = _font(int(round(size)))
+        """Text on a finished (output-size) image at pixel ``xy``, font ``size`` pixels.
+
+        The glyphs' coverage is rendered once per text (:func:`_text_mask`; a frame shows
+        its clock in both panels) and the colour pasted through it, which blends exactly as
+        drawing the text does."""
+        x, y = (int(round(v)) for v in xy)
+        mask, (x0, y0, x1, y1) = _text_mask(text, int(round(size)), anchor)
         if box:
-            bbox = draw.textbbox(xy, text, font=font, anchor=anchor)
-            draw.rectangle(
-                (bbox[0] - 3, bbox[1] - 2, bbox[2] + 3, bbox[3] + 3), fill=(255, 255, 255)
+            ImageDraw.Draw(image).rectangle(
+                (x + x0 - 3, y + y0 - 2, x + x1 + 3, y + y1 + 3), fill=(255, 255, 255)
             )
-        draw.text(xy, text, font=font, fill=fill, anchor=anchor)
+        image.paste(fill, (x + x0, y + y0), mask)
+
+
+@lru_cache(maxsize=16)
+def _text_mask(text: str, size: int, anchor: str) -> tuple[Image.Image, tuple[int, int, int, int]]:
+    """The coverage (mode L) of ``text`` in the font of ``size`` pixels, and its box
+    relative to the ``anchor`` point (left, top, right, bottom pixels)."""
+    font = _font(size)
+    x0, y0, x1, y1 = ImageDraw.Draw(Image.new("L", (1, 1))).textbbox(
+        (0, 0), text, font=font, anchor=anchor
+    )
+    x0, y0, x1, y1 = int(x0), int(y0), int(x1), int(y1)
+    mask = Image.new("L", (max(1, x1 - x0), max(1, y1 - y0)), 0)
+    ImageDraw.Draw(mask).text((-x0, -y0), text, font=font, fill=255, anchor=anchor)
+    return mask, (x0, y0, x1, y1)
 
 
 #: Font sizes (pixels at the output size) of the frame texts: title, figures, clock.
@@ -351,6 +368,11 @@ class PlaybackDrawer:
         self._path_end = 0
         self._path_box: tuple[int, int, int, int] | None = None
         self._marks_box = _box(np.concatenate([self.ref_2d, self.via_2d]), 4.0 * SUPERSAMPLE)
+        # Both layers flattened into one picture and where it holds drawing, kept up to date
+        # where the layers gain drawing: a frame composites it once, by a plain copy of the
+        # pixels the mask holds.
+        self._over: Image.Image | None = None
+        self._over_mask: Image.Image | None = None
         # The last frame drawn: its canvas, reduced, and the box its moving bodies covered. A
         # frame redraws and reduces only the box that changed (the bodies that move, then and
         # now, and what the overlays gained); ``_changed`` is what the overlays gained (None:
@@ -379,11 +401,14 @@ class PlaybackDrawer:
             width=max(1, s),
         )
 
-    def _overlays(self, index: int, t: float) -> list[tuple[Image.Image, Any]]:
-        """The overlay layers at frame ``index`` (time ``t`` s), each with the box that holds
-        its drawing (None: nothing drawn yet)."""
+    def _overlays(
+        self, index: int, t: float
+    ) -> tuple[Image.Image, Image.Image, tuple[int, int, int, int] | None]:
+        """The overlays at frame ``index`` (time ``t`` s) as one picture: its colours (RGB),
+        where it holds drawing (mode 1) and the box that does (None: nothing drawn yet)."""
         pb, p, s = self.playback, self.painter, SUPERSAMPLE
         reached = np.nan_to_num(pb.via_reach_times, nan=np.inf) <= t + 1e-9
+        gained = None  # what the overlays gained this frame
         if self._marks is None or self._reached is None or np.any(self._reached & ~reached):
             # From the start (or back in time): the path, every dot open, the reached filled.
             self._marks, self._reached = self._layer(), np.zeros_like(reached)
@@ -392,23 +417,42 @@ class PlaybackDrawer:
                 draw.line(run, fill=(51, 89, 217), width=max(1, int(1.2 * s)))
             for j in range(self.via_2d.shape[0]):
                 self._dot(draw, j, False)
-            self._changed = self._whole()
+            gained = self._whole()
         if np.any(reached & ~self._reached):
             draw = ImageDraw.Draw(self._marks)
             for hit in np.flatnonzero(reached & ~self._reached).tolist():
                 self._dot(draw, hit, True)
-                self._changed = _union(self._changed, _box(self.via_2d[hit], 4.0 * s))
+                gained = _union(gained, _box(self.via_2d[hit], 4.0 * s))
             self._reached = reached
         if self._path is None or index < self._path_end:
             self._path, self._path_end, self._path_box = self._layer(), 0, None
-            self._changed = self._whole()
+            gained = self._whole()
         if index > self._path_end:
             piece = self.path_2d[self._path_end : index + 1]
             p.polyline(ImageDraw.Draw(self._path), piece, (230, 102, 13), 1.6 * s)
             self._path_box = _union(self._path_box, _box(piece, 2.0 * s))
-            self._changed = _union(self._changed, _box(piece, 2.0 * s))
+            gained = _union(gained, _box(piece, 2.0 * s))
             self._path_end = index
-        return [(self._marks, self._marks_box), (self._path, self._path_box)]
+        self._changed = _union(self._changed, gained)
+        self._flatten(gained)
+        assert self._over is not None and self._over_mask is not None
+        return self._over, self._over_mask, _union(self._marks_box, self._path_box)
+
+    def _flatten(self, box: tuple[int, int, int, int] | None) -> None:
+        """Bring the flat copy of the overlays (the path taken over the marks; their
+        drawing is opaque, so a pixel is one layer's colour or neither) up to date in
+        ``box``."""
+        if self._over is None or self._over_mask is None:
+            w, h = self._whole()[2:]
+            self._over, self._over_mask = Image.new("RGB", (w, h)), Image.new("1", (w, h))
+            box = self._whole()
+        box = _intersection(box, self._whole())
+        if box is None or self._marks is None or self._path is None:
+            return
+        part = self._marks.crop(box)
+        part.alpha_composite(self._path.crop(box))
+        self._over.paste(part.convert("RGB"), box[:2])
+        self._over_mask.paste(part.getchannel("A").convert("1", dither=Image.Dither.NONE), box[:2])
 
     def draw(
         self,
@@ -430,7 +474,7 @@ class PlaybackDrawer:
         tfs = pb.frames[index] if transforms is None else transforms
         items = p.body_items(tfs[self.moving], self.moving_shapes)
         t = pb.frame_times[index] if time is None else time
-        layers = self._overlays(index % pb.frames.shape[0], float(t))
+        over, over_mask, over_box = self._overlays(index % pb.frames.shape[0], float(t))
         bodies = _items_box(items)
         if self._canvas is None or self._small is None:
             self._canvas, _ = p.canvas()
@@ -445,8 +489,7 @@ class PlaybackDrawer:
             image = self._canvas
             image.paste((255, 255, 255), box)
             p.draw_items(ImageDraw.Draw(image), items + self.static_items)
-            for layer, layer_box in layers:
-                paste_layer(image, layer, _intersection(layer_box, box))
+            paste_layer(image, over, over_mask, _intersection(over_box, box))
             s = SUPERSAMPLE
             self._small.paste(p.finish_part(image, box), (box[0] // s, box[1] // s))
         out, at = _place(self._small, into)
@@ -530,18 +573,18 @@ def _items_box(items: Sequence[tuple]) -> tuple[int, int, int, int] | None:
     return (int(lo[0]), int(lo[1]), int(hi[0]), int(hi[1]))
 
 
-def paste_layer(image: Image.Image, layer: Image.Image, box: Any) -> None:
-    """Composite the RGBA ``layer`` (the size of ``image``) over ``image`` within ``box``
-    (left, top, right, bottom pixels; None: nothing to composite): the same pixels as the
-    whole layer pasted, at the cost of the box."""
+def paste_layer(image: Image.Image, layer: Image.Image, mask: Image.Image, box: Any) -> None:
+    """Copy the pixels of ``layer`` (the size of ``image``) that ``mask`` (mode 1 or L, the
+    same size) holds onto ``image`` within ``box`` (left, top, right, bottom pixels; None:
+    nothing to composite): the same pixels as the whole layer pasted through the mask, at
+    the cost of the box."""
     if box is None:
         return
     w, h = image.size
     box = (max(0, box[0]), max(0, box[1]), min(w, box[2]), min(h, box[3]))
     if box[0] >= box[2] or box[1] >= box[3]:
         return
-    part = layer.crop(box)
-    image.paste(part, box[:2], part)
+    image.paste(layer.crop(box), box[:2], mask.crop(box))
 
 
 def _check_size(size: tuple[int, int]) -> tuple[int, int]:

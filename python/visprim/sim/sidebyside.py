@@ -216,7 +216,7 @@ class SideBySide:
             )
         )
         w, h = self.size
-        out = Image.new("RGB", (2 * w, h), (255, 255, 255))
+        out = Image.new("RGB", (2 * w, h), None)  # not filled: the two panels cover it
         self.human_frame(tau, into=(out, (0, 0)))
         self.adonis.draw(k, clock=tau, into=(out, (w, 0)))
         return out
