@@ -31,13 +31,15 @@ import struct
 import threading
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from PIL import Image
 
 from visprim import _visprim
 from visprim.atomic import atomic_file
+
+T = TypeVar("T")
 
 #: Supported extensions → what writes them.
 VIDEO_FORMATS: dict[str, str] = {".gif": "Pillow", ".mp4": "imageio-ffmpeg (visprim[video])"}
@@ -128,6 +130,12 @@ def _gif(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
 #: with the drawing (a 5-minute imitation: 103 -> 80 s of CPU, docs/imitation.rst).
 MP4_PRESET = "veryfast"
 
+#: x264 encodes in one thread. Its own choice (about 1.5 threads a core, and lookahead
+#: threads) takes the cores from the thread drawing the frames, the slower of the two: on
+#: two cores a 5-minute imitation took 80 s so, 62 s with one encoder thread
+#: (``benches/bench_imitate_long.py --video imitation.mp4``, docs/imitation.rst).
+MP4_THREADS = ["-threads", "1"]
+
 #: How the YUV frames handed to x264 are tagged: BT.601 coefficients (``smpte170m``), studio
 #: range (``tv``), what :func:`yuv420` computes, so players turn them back into the same RGB.
 MP4_COLOUR = ["-colorspace", "smpte170m", "-color_range", "tv"]
@@ -145,17 +153,29 @@ def yuv420(image: Image.Image) -> np.ndarray:
         return _visprim.rgb_to_yuv420(image.tobytes(), w, h)
 
 
-def _mp4(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
+def _yuv_frames(
+    frames: Iterable[Image.Image],
+) -> Iterator[tuple[tuple[int, int], np.ndarray]]:
+    """Each frame's size (pixels) and :func:`yuv420` planes. The conversion runs here, in
+    the thread that feeds the encoder, beside the thread drawing the next frame (on two
+    cores that is faster than converting where the frames are drawn: 66 s against 76 s
+    for a 5-minute imitation)."""
+    for im in frames:
+        rgb = im if im.mode == "RGB" else im.convert("RGB")
+        yield rgb.size, yuv420(rgb)
+
+
+def _mp4(tmp: Path, frames: Iterable[tuple[tuple[int, int], np.ndarray]], fps: float) -> int:
+    """Write ``(size, yuv420p planes)`` frames (:func:`_yuv_frames`) as H.264."""
     import imageio_ffmpeg
 
     writer = None
     size = (0, 0)
     n = 0
     try:
-        for im in frames:
-            rgb = im if im.mode == "RGB" else im.convert("RGB")
+        for frame_size, planes in frames:
             if writer is None:
-                size = rgb.size
+                size = frame_size
                 writer = imageio_ffmpeg.write_frames(
                     str(tmp),
                     tuple(v + v % 2 for v in size),
@@ -165,12 +185,12 @@ def _mp4(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
                     pix_fmt_out="yuv420p",
                     macro_block_size=1,
                     input_params=MP4_COLOUR,
-                    output_params=["-f", "mp4", "-preset", MP4_PRESET, *MP4_COLOUR],
+                    output_params=["-f", "mp4", "-preset", MP4_PRESET, *MP4_THREADS, *MP4_COLOUR],
                 )
                 writer.send(None)
-            elif rgb.size != size:
-                raise ValueError(f"write_video: frame {n} is {rgb.size}, the first {size}")
-            writer.send(yuv420(rgb))
+            elif frame_size != size:
+                raise ValueError(f"write_video: frame {n} is {frame_size}, the first {size}")
+            writer.send(planes)
             n += 1
         if writer is None:
             raise ValueError("write_video: no frames to write")
@@ -184,7 +204,7 @@ def _mp4(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
 PREFETCH = 4
 
 
-def prefetched(frames: Iterable[Image.Image], depth: int = PREFETCH) -> Iterator[Image.Image]:
+def prefetched(frames: Iterable[T], depth: int = PREFETCH) -> Iterator[T]:
     """``frames``, produced by a background thread up to ``depth`` ahead (memory: ``depth``
     frames). An exception in the producer is raised here; leaving the loop early (or an
     interrupt) stops the producer."""
@@ -234,5 +254,5 @@ def write_video(path: str | Path, frames: Iterable[Image.Image], fps: float) -> 
         if out.suffix.lower() == ".gif":
             _gif(tmp, prefetched(frames), float(fps))
         else:
-            _mp4(tmp, prefetched(frames), float(fps))
+            _mp4(tmp, _yuv_frames(prefetched(frames)), float(fps))
     return out
