@@ -122,3 +122,52 @@ def test_split_and_fit_families_count_as_eigen_dct_and_improve_on_it() -> None:
     # the spread, which an even split always is; the fit starts from the chosen split.
     assert errs["eigen/dct-split2"] <= errs["eigen/dct"] + 1e-9
     assert errs["eigen/dct-fit2"] <= errs["eigen/dct-split2"] + 1e-9
+
+
+def test_whole_movement_rows_are_shared_across_segment_settings() -> None:
+    """The nested search scores every segment setting on one fold; the whole-movement
+    rows (which ignore those settings) are computed once and are the same rows as a fold
+    computed afresh."""
+    from pathlib import Path
+
+    from _motion_data import movements
+    from visprim.evaluate import Recording, make_benchmarks
+    from visprim.rate.benchmark import _fold
+    from visprim.trial import split_arms
+
+    data, labels = movements(3, seed=0)
+    recs = [
+        Recording(Path(f"m{i}.bvh"), lab, "", f"g{i // 3}", "", "synthetic")
+        for i, lab in enumerate(labels)
+    ]
+    bench = make_benchmarks(recs, data)[0][0]
+    groups = [str(g) for g in bench.groups]
+    train = split_arms([m for m, g in zip(bench.movements, groups, strict=True) if g != "g2"])
+    test = split_arms([m for m, g in zip(bench.movements, groups, strict=True) if g == "g2"])
+    small = {"n_samples": 20, "n_components": 5, "n_clusters": 4, "n_init": 1}
+
+    def run(settings: list[tuple[str, float | None]], prepared: dict) -> list[list[dict]]:
+        out = []
+        for posture, stroke in settings:
+            rows: list[dict] = []
+            _fold(
+                train,
+                test,
+                "g2",
+                small,
+                ("eigen/dct-fit1",),
+                centres="projection",
+                max_stroke=stroke,
+                rows=rows,
+                posture_mode=posture,
+                prepared=prepared,
+                joint=False,
+            )
+            out.append(rows)
+        return out
+
+    shared = run([("mean", None), ("unit", 0.8)], {})
+    fresh = run([("unit", 0.8)], {})
+    assert shared[0] == shared[1] == fresh[0]
+    assert shared[0] and {r["family"] for r in shared[0]} == {"eigen/dct-fit1"}
+    assert all(r["numbers"] <= r["param"] * r["seconds"] + 1e-9 for r in shared[0])
