@@ -171,3 +171,23 @@ def test_whole_movement_rows_are_shared_across_segment_settings() -> None:
     assert shared[0] == shared[1] == fresh[0]
     assert shared[0] and {r["family"] for r in shared[0]} == {"eigen/dct-fit1"}
     assert all(r["numbers"] <= r["param"] * r["seconds"] + 1e-9 for r in shared[0])
+
+
+def test_a_whole_movement_within_a_budget_uses_the_fitted_code_by_default() -> None:
+    from visprim.rate.budget import describe_movement
+
+    angles, directions = [], []
+    for seed in range(12):
+        a, d = _movement(seed + 30, frames=50 + 2 * seed)
+        angles.append(a)
+        directions.append(d)
+    seconds = [0.034 * (a.shape[0] - 1) for a in angles]
+    book = fit_eigen_movements(directions[:-1], angles[:-1], seconds[:-1], (12.0,))
+    a, d, s = angles[-1], directions[-1], seconds[-1]
+    values, desc = describe_movement(book, d, a, s, 12.0)
+    code, rebuilt, numbers = eigen_describe(book, "eigen/dct-fit3", 12.0, s, d, a)
+    expected = rebuilt if code == "eigen" else from_angles(rebuilt, "directions")
+    np.testing.assert_allclose(values, expected)
+    assert desc.numbers == numbers == eigen_numbers(12.0, s)
+    with pytest.raises(ValueError, match="not 'eigen'"):
+        describe_movement(book, d, a, s, 12.0, code_family="eigen")
