@@ -427,12 +427,22 @@ def _eigen_row(
 
 
 def _baseline(rows: list[dict[str, Any]], mv: HeldOut, family: str, rate: float) -> None:
-    kind, channels = family.split("-")
+    """Score one baseline ``family`` (``keyframes-…``, ``dct-…``, ``dct-angles-fit``) on
+    one held-out movement at ``rate``: its count per channel rounded from the rate."""
+    from visprim.rate.descriptions import fit_dct_coefficients
+
+    kind, channels, *fit = family.split("-")
     signal = mv.angles if channels == "angles" else mv.directions
     c = signal.shape[1]
     count = max(2, int(round((rate * mv.seconds - 2.0) / c)))
     count = min(count, signal.shape[0])
-    rebuilt = keyframe_rebuild(signal, count) if kind == "keyframes" else dct_rebuild(signal, count)
+    if fit:
+        counts = np.full(c, count, dtype=np.int64)
+        rebuilt, _ = fit_dct_coefficients(signal, mv.directions, counts)
+    elif kind == "keyframes":
+        rebuilt = keyframe_rebuild(signal, count)
+    else:
+        rebuilt = dct_rebuild(signal, count)
     numbers = 2 + c * count
     if channels == "angles":
         _score(rows, mv, family, rate, numbers, angles=rebuilt)

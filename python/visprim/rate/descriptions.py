@@ -34,6 +34,7 @@ FAMILIES: tuple[str, ...] = (
     "keyframes-directions",
     "dct-angles",
     "dct-directions",
+    "dct-angles-fit",
 )
 #: Where primitive centres live: the k-means centres in the projection space (the paper),
 #: or the means of the members' whole segment vectors.
