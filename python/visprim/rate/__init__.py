@@ -58,7 +58,9 @@ segment is rebuilt by a description (:data:`FAMILIES`):
 ``keyframes``, ``dct``
     baselines on the same movements: each channel (the 4 arm angles, or the 6 bone-direction
     coordinates) sampled at equally spaced instants and joined by a cubic spline, or its
-    first DCT-II coefficients, at the rates :data:`BASELINE_RATES`.
+    first DCT-II coefficients, at the rates :data:`BASELINE_RATES`; ``dct-angles-fit``
+    the same DCT of the angles with its coefficients fitted to the bone directions
+    (:func:`fit_dct_coefficients`), what the fit alone gives a DCT coder.
 
 Primitive centres are either the k-means centres in the f-D projection space (the paper
 and :class:`~visprim.model.PrimitiveModel`, ``centres="projection"``, the default) or the
