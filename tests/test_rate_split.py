@@ -191,3 +191,25 @@ def test_a_whole_movement_within_a_budget_uses_the_fitted_code_by_default() -> N
     assert desc.numbers == numbers == eigen_numbers(12.0, s)
     with pytest.raises(ValueError, match="not 'eigen'"):
         describe_movement(book, d, a, s, 12.0, code_family="eigen")
+
+
+def test_fitted_dct_baseline_stores_the_same_numbers_and_rebuilds_closer() -> None:
+    from visprim.rate.benchmark import HeldOut, _baseline
+
+    angles, directions = _movement(5, frames=80)
+    times = 0.034 * np.arange(angles.shape[0])
+    mv = HeldOut(
+        "m",
+        "g",
+        times,
+        directions,
+        angles,
+        np.array([[times[0], times[-1]]]),
+        np.array([0]),
+    )
+    rows: list[dict] = []
+    for family in ("dct-angles", "dct-angles-fit"):
+        _baseline(rows, mv, family, 12.0)
+    plain, fitted = rows
+    assert plain["numbers"] == fitted["numbers"]
+    assert fitted["bone_deg"] < plain["bone_deg"]
