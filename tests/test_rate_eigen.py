@@ -154,7 +154,9 @@ def test_a_whole_movement_within_a_budget_states_its_description() -> None:
     directions = [from_angles(a, "directions") for a in angles]
     seconds = [0.034 * (EIGEN_SAMPLES - 1)] * len(angles)
     book = fit_eigen_movements(directions[:-1], angles[:-1], seconds[:-1], (12.0,))
-    values, d = describe_movement(book, directions[-1], angles[-1], seconds[-1], 12.0)
+    values, d = describe_movement(
+        book, directions[-1], angles[-1], seconds[-1], 12.0, code_family="eigen/dct"
+    )
     assert d.numbers_per_s <= 12.0 and d.numbers == eigen_numbers(12.0, seconds[-1])
     assert d.m == d.numbers - 3 and d.family in ("eigen", "eigen/dct")
     assert ("eigen-movement" if d.family == "eigen" else "DCT") in d.label

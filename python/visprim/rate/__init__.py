@@ -44,10 +44,23 @@ segment is rebuilt by a description (:data:`FAMILIES`):
     the same size, whichever rebuilds the movement closer, and stores one number that says
     which. They store the start, the duration (and the flag) and ``floor(rate × seconds)``
     numbers in all (:func:`eigen_numbers`), at the rates :data:`BASELINE_RATES`.
+``eigen/dct-splitD``, ``eigen/dct-fitD``
+    as ``eigen/dct``, with the DCT alternative coded better for the same numbers: the
+    encoder also chooses how the DCT's coefficients are split over the 4 angle channels,
+    among every split with each channel within D coefficients of the even share
+    (:func:`dct_splits`), and the one number that ``eigen/dct`` spends on its flag holds
+    the choice (an integer: the eigen-movements or one split); ``fit`` then fits the
+    chosen split's coefficients to the movement's bone directions
+    (:func:`fit_dct_coefficients`) instead of taking the truncated DCT of its angles. The
+    decoder is the same: the first coefficients of each channel, inverse DCT, angles to
+    bone directions. The nested search chooses D among 1, 2, 3 (at the rates
+    :data:`~visprim.rate.descriptions.SPLIT_RATES`).
 ``keyframes``, ``dct``
     baselines on the same movements: each channel (the 4 arm angles, or the 6 bone-direction
     coordinates) sampled at equally spaced instants and joined by a cubic spline, or its
-    first DCT-II coefficients, at the rates :data:`BASELINE_RATES`.
+    first DCT-II coefficients, at the rates :data:`BASELINE_RATES`; ``dct-angles-fit``
+    the same DCT of the angles with its coefficients fitted to the bone directions
+    (:func:`fit_dct_coefficients`), what the fit alone gives a DCT coder.
 
 Primitive centres are either the k-means centres in the f-D projection space (the paper
 and :class:`~visprim.model.PrimitiveModel`, ``centres="projection"``, the default) or the
@@ -91,10 +104,13 @@ from visprim.rate.descriptions import (
     RATE_M,
     Codebook,
     EigenMovements,
+    best_dct_split,
     dct_residual,
+    dct_splits,
     eigen_describe,
     eigen_numbers,
     fit_codebook,
+    fit_dct_coefficients,
     fit_eigen_movements,
     movement_numbers,
     rebuild_segments,
@@ -121,15 +137,18 @@ __all__ = [
     "HeldOut",
     "NestedResult",
     "RateResult",
+    "best_dct_split",
     "best_within",
     "bone_rms_deg",
     "dct_rebuild",
     "dct_residual",
+    "dct_splits",
     "describe_segments",
     "eigen_describe",
     "eigen_numbers",
     "evaluate_rate",
     "fit_codebook",
+    "fit_dct_coefficients",
     "fit_eigen_movements",
     "joint_rms_deg",
     "keyframe_rebuild",

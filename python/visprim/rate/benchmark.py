@@ -24,6 +24,7 @@ from visprim.rate.descriptions import (
     Codebook,
     bridge_lines,
     eigen_describe,
+    eigen_rates,
     fit_codebook,
     fit_eigen_movements,
     movement_numbers,
@@ -316,9 +317,18 @@ def _fold(
                 eigen = _eigen_book(train_corpus)
                 if prepared is not None:
                     prepared[key] = eigen
-            for rate in BASELINE_RATES:
-                for mv in movements:
-                    _eigen_row(rows, mv, eigen, family, float(rate), joint)
+            # The whole-movement codes do not depend on the segment settings (posture,
+            # max stroke): the settings tried on one fold share their rows.
+            rows_key = f"{group}|rows|{family}"
+            cached_rows = None if prepared is None else prepared.get(rows_key)
+            if cached_rows is None:
+                cached_rows = []
+                for rate in eigen_rates(family):
+                    for mv in movements:
+                        _eigen_row(cached_rows, mv, eigen, family, float(rate), joint)
+                if prepared is not None:
+                    prepared[rows_key] = cached_rows
+            rows.extend(dict(r) for r in cached_rows)
             continue
         # m up to f, and f itself: the per-segment projection.
         m_values = tuple(sorted({m for m in RATE_M if m < book.n_components} | {book.n_components}))
@@ -417,12 +427,22 @@ def _eigen_row(
 
 
 def _baseline(rows: list[dict[str, Any]], mv: HeldOut, family: str, rate: float) -> None:
-    kind, channels = family.split("-")
+    """Score one baseline ``family`` (``keyframes-…``, ``dct-…``, ``dct-angles-fit``) on
+    one held-out movement at ``rate``: its count per channel rounded from the rate."""
+    from visprim.rate.descriptions import fit_dct_coefficients
+
+    kind, channels, *fit = family.split("-")
     signal = mv.angles if channels == "angles" else mv.directions
     c = signal.shape[1]
     count = max(2, int(round((rate * mv.seconds - 2.0) / c)))
     count = min(count, signal.shape[0])
-    rebuilt = keyframe_rebuild(signal, count) if kind == "keyframes" else dct_rebuild(signal, count)
+    if fit:
+        counts = np.full(c, count, dtype=np.int64)
+        rebuilt, _ = fit_dct_coefficients(signal, mv.directions, counts)
+    elif kind == "keyframes":
+        rebuilt = keyframe_rebuild(signal, count)
+    else:
+        rebuilt = dct_rebuild(signal, count)
     numbers = 2 + c * count
     if channels == "angles":
         _score(rows, mv, family, rate, numbers, angles=rebuilt)

@@ -333,19 +333,25 @@ def describe_movement(
     angles: NDArray[np.float64],
     seconds: float,
     budget: float,
+    code_family: str = "eigen/dct-fit3",
 ) -> tuple[NDArray[np.float64], Description]:
     """One whole movement (no segments) described within ``budget`` numbers per second
     through the eigen-movements ``book`` (:class:`~visprim.rate.descriptions.EigenMovements`,
     learned from training movements): its bone directions ``(T, 6)`` rebuilt by the
-    encoder's choice of the eigen-movements or the truncated DCT of its 4 arm angles
-    ``(T, 4)`` (``eigen/dct``, :func:`~visprim.rate.descriptions.eigen_describe`), and the
-    :class:`Description` used: ``family`` ``"eigen"`` (eigen-movement coefficients) or
-    ``"eigen/dct"`` (DCT coefficients), ``m`` its coefficients, ``numbers`` all it stores
-    (start, duration, the flag and the coefficients)."""
+    encoder's choice of the eigen-movements or the DCT of its 4 arm angles ``(T, 4)``
+    (``code_family``, one of :data:`~visprim.rate.descriptions.EIGEN_FAMILIES` but
+    ``eigen``; by default ``eigen/dct-fit3``, what the nested leave-one-actor-out chose on
+    HDM05 at every budget from 10 to 20, docs/rate.rst;
+    :func:`~visprim.rate.descriptions.eigen_describe`), and the :class:`Description` used:
+    ``family`` ``"eigen"`` (eigen-movement coefficients) or ``"eigen/dct"`` (DCT
+    coefficients), ``m`` its coefficients, ``numbers`` all it stores (start, duration, the
+    flag or split index and the coefficients)."""
     from visprim.features import from_angles
     from visprim.rate.descriptions import EIGEN_CHOICE, EIGEN_HEAD, eigen_describe
 
-    code, rebuilt, numbers = eigen_describe(book, "eigen/dct", budget, seconds, directions, angles)
+    if code_family == "eigen":
+        raise ValueError("code_family: a family with a DCT alternative, not 'eigen'")
+    code, rebuilt, numbers = eigen_describe(book, code_family, budget, seconds, directions, angles)
     m = numbers - EIGEN_HEAD - EIGEN_CHOICE
     family = "eigen" if code == "eigen" else "eigen/dct"
     values = rebuilt if code == "eigen" else from_angles(rebuilt, "directions")

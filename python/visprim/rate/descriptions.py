@@ -28,10 +28,13 @@ FAMILIES: tuple[str, ...] = (
     "bridge+residual",
     "eigen",
     "eigen/dct",
+    "eigen/dct-split2",
+    "eigen/dct-fit2",
     "keyframes-angles",
     "keyframes-directions",
     "dct-angles",
     "dct-directions",
+    "dct-angles-fit",
 )
 #: Where primitive centres live: the k-means centres in the projection space (the paper),
 #: or the means of the members' whole segment vectors.
@@ -314,12 +317,44 @@ EIGEN_SAMPLES = 160
 #: first m coefficients along the eigen-movements; ``eigen/dct`` also lets the encoder take
 #: the truncated DCT of the 4 arm angles instead, whichever rebuilds the movement closer,
 #: with one number that says which.
-EIGEN_FAMILIES: tuple[str, ...] = ("eigen", "eigen/dct")
+EIGEN_FAMILIES: tuple[str, ...] = (
+    "eigen",
+    "eigen/dct",
+    "eigen/dct-split2",
+    "eigen/dct-fit1",
+    "eigen/dct-fit2",
+    "eigen/dct-fit3",
+)
+#: Prefix of the ``eigen/dct-splitD`` families: the encoder also chooses, per movement, how
+#: the DCT's coefficients are split over the 4 angle channels, each channel within ``D``
+#: coefficients of the even share (:func:`dct_splits`), and stores the choice in the one
+#: number that ``eigen/dct`` spends on its flag (an integer: 0 for the eigen-movements,
+#: 1 + the split's index for the DCT).
+SPLIT_PREFIX = "eigen/dct-split"
+#: Prefix of the ``eigen/dct-fitD`` families: as ``eigen/dct-splitD``, and the chosen
+#: split's coefficients are then fitted to the bone directions (:func:`fit_dct_coefficients`)
+#: instead of being the truncated DCT of the angles. The decoder is the same.
+FIT_PREFIX = "eigen/dct-fit"
+#: Gauss–Newton steps of :func:`fit_dct_coefficients`.
+FIT_ITERATIONS = 4
 #: Numbers per movement an eigen-movement description needs besides its coefficients: its
 #: start and its duration.
 EIGEN_HEAD = 2
 #: Numbers of the choice between eigen-movements and DCT (one flag per movement).
 EIGEN_CHOICE = 1
+
+
+#: Rates (numbers per second) of the ``eigen/dct-split`` and ``eigen/dct-fit`` families:
+#: those of :data:`BASELINE_RATES` from 8 to 20, where numbers are scarce (the encoder's
+#: search over splits and its fit cost about 0.05 s per movement and rate).
+SPLIT_RATES: tuple[float, ...] = tuple(r for r in BASELINE_RATES if 8 <= r <= 20)
+
+
+def eigen_rates(family: str) -> tuple[float, ...]:
+    """The rates at which the benchmark measures an eigen-movement ``family``."""
+    if family.startswith((SPLIT_PREFIX, FIT_PREFIX)):
+        return SPLIT_RATES
+    return BASELINE_RATES
 
 
 def eigen_numbers(rate: float, seconds: float) -> int:
@@ -398,6 +433,130 @@ def dct_rebuild_counts(
     return np.asarray(idct(c, type=2, norm="ortho", axis=0), dtype=np.float64)
 
 
+def dct_splits(n: int, n_channels: int, spread: int, n_frames: int) -> NDArray[np.int64]:
+    """Every split ``(K, n_channels)`` of ``n`` DCT coefficients over ``n_channels``
+    channels with each channel's count within ``spread`` of the even share ``n /
+    n_channels``, at least 1 and at most ``n_frames``, in lexicographic order. Encoder and
+    decoder both know the list from ``n``, so an index into it says which split was used.
+    Empty when no split fits."""
+    share = n / n_channels
+    lo = max(1, int(np.ceil(share - spread - 1e-9)))
+    hi = min(int(n_frames), int(np.floor(share + spread + 1e-9)))
+    if hi < lo:
+        return np.zeros((0, n_channels), dtype=np.int64)
+    grid = np.stack(
+        np.meshgrid(*[np.arange(lo, hi + 1)] * n_channels, indexing="ij"), axis=-1
+    ).reshape(-1, n_channels)
+    return np.ascontiguousarray(grid[grid.sum(axis=1) == n], dtype=np.int64)
+
+
+def best_dct_split(
+    angles: NDArray[np.float64], directions: NDArray[np.float64], n: int, spread: int
+) -> tuple[int, NDArray[np.float64], float]:
+    """The split of ``n`` DCT coefficients of the arm ``angles`` ``(T, 4)`` among
+    :func:`dct_splits` whose rebuilt bone directions lie closest to ``directions``
+    ``(T, 6)``: its index, the rebuilt angles and the bone-direction RMS, degrees (index
+    −1, the input and infinity when no split fits)."""
+    from scipy.fft import dct, idct
+
+    from visprim.features import from_angles
+
+    a = np.asarray(angles, dtype=np.float64)
+    t, c = a.shape
+    splits = dct_splits(n, c, spread, t)
+    if splits.shape[0] == 0:
+        return -1, a, float("inf")
+    coef = dct(a, type=2, norm="ortho", axis=0)
+    rows = np.arange(t)[:, None]
+    # Each channel rebuilt from each count a split may give it.
+    counts = np.unique(splits)
+    partial = {
+        int(k): np.asarray(idct(np.where(rows < k, coef, 0.0), type=2, norm="ortho", axis=0))
+        for k in counts
+    }
+    cand = np.stack(
+        [np.stack([partial[int(k)][:, j] for j, k in enumerate(split)], axis=1) for split in splits]
+    )  # (K, T, C)
+    rebuilt = from_angles(cand.reshape(-1, c), "directions").reshape(splits.shape[0], t, -1, 3)
+    ref = np.asarray(directions, dtype=np.float64).reshape(1, t, -1, 3)
+    cos = np.sum(rebuilt * ref, axis=3) / np.maximum(
+        np.linalg.norm(rebuilt, axis=3) * np.linalg.norm(ref, axis=3), 1e-12
+    )
+    err = np.degrees(np.sqrt(np.mean(np.arccos(np.clip(cos, -1.0, 1.0)) ** 2, axis=(1, 2))))
+    best = int(np.argmin(err))
+    return best, np.asarray(cand[best]), float(err[best])
+
+
+def _unit_rows(values: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(T, 3 b)`` bone directions scaled to unit length per bone, flattened ``(T · 3 b,)``."""
+    v = values.reshape(values.shape[0], -1, 3)
+    return np.asarray(v / np.maximum(np.linalg.norm(v, axis=2, keepdims=True), 1e-12)).ravel()
+
+
+def fit_dct_coefficients(
+    angles: NDArray[np.float64],
+    directions: NDArray[np.float64],
+    counts: NDArray[np.int64],
+    iterations: int = FIT_ITERATIONS,
+) -> tuple[NDArray[np.float64], float]:
+    """The first ``counts[j]`` DCT-II coefficients of each angle channel j, chosen so that
+    the bone directions they rebuild lie close to ``directions`` ``(T, 6)``, not the
+    truncated DCT of ``angles`` ``(T, 4)`` (which is closest in the angles, a metric that
+    near the shoulder's singular posture says little about the bones).
+
+    Starts at the truncated DCT and takes ``iterations`` Levenberg–Marquardt steps on the
+    squared distance between the unit bone vectors (the chord, ≈ the angle for small
+    errors), keeping a step only if the bone-direction RMS falls. Returns the rebuilt
+    angles ``(T, 4)`` and their bone-direction RMS, degrees. The stored numbers are the
+    same as the truncated DCT's: only the encoder differs."""
+    from scipy.fft import dct, idct
+    from threadpoolctl import threadpool_limits
+
+    from visprim.features import from_angles
+    from visprim.rate.measures import bone_rms_deg
+
+    a = np.asarray(angles, dtype=np.float64)
+    t, c = a.shape
+    target = _unit_rows(np.asarray(directions, dtype=np.float64))
+    mask = np.arange(t)[:, None] < np.asarray(counts)[None, :]  # (T, C): kept coefficients
+    coef = np.where(mask, dct(a, type=2, norm="ortho", axis=0), 0.0)
+    basis = idct(np.eye(t), type=2, norm="ortho", axis=0)  # basis[:, i]: coefficient i in time
+    rows, cols = np.nonzero(mask)  # coefficient i = rows, channel j = cols
+    h = 1e-6  # rad, the finite-difference step of the per-frame Jacobian
+
+    def synth(k: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.asarray(idct(k, type=2, norm="ortho", axis=0))
+
+    current = synth(coef)
+    err = bone_rms_deg(from_angles(current, "directions"), directions)
+    damping = 1e-3
+    with threadpool_limits(limits=1, user_api="blas"):
+        for _ in range(int(iterations)):
+            f0 = from_angles(current, "directions")  # (T, 6)
+            moved = current[None, :, :] + h * np.eye(c)[:, None, :]  # (C, T, C)
+            df = (from_angles(moved.reshape(-1, c), "directions").reshape(c, t, -1) - f0) / h
+            # d residual(t, o) / d coefficient (i, j) = df[j, t, o] · basis[t, i]
+            jac = (df[cols] * basis[:, rows].T[:, :, None]).reshape(rows.size, -1).T
+            r = f0.ravel() - target
+            hess = jac.T @ jac
+            grad = jac.T @ r
+            improved = False
+            for _ in range(4):
+                step = np.linalg.solve(hess + damping * np.diag(np.diag(hess) + 1e-12), -grad)
+                trial = coef.copy()
+                trial[rows, cols] += step
+                rebuilt = synth(trial)
+                e = bone_rms_deg(from_angles(rebuilt, "directions"), directions)
+                if e < err:
+                    coef, current, err, improved = trial, rebuilt, e, True
+                    damping *= 0.3
+                    break
+                damping *= 10.0
+            if not improved:
+                break
+    return current, float(err)
+
+
 def _dct_order(
     angles: Sequence[NDArray[np.float64]],
     directions: Sequence[NDArray[np.float64]],
@@ -474,6 +633,16 @@ def eigen_describe(
     eigen = book.rebuild(directions, n)
     c = angles.shape[1]
     if n < c:
+        return "eigen", eigen, numbers
+    if family.startswith((SPLIT_PREFIX, FIT_PREFIX)):
+        fit = family.startswith(FIT_PREFIX)
+        spread = int(family[len(FIT_PREFIX if fit else SPLIT_PREFIX) :])
+        index, split, err = best_dct_split(angles, directions, n, spread)
+        if fit and index >= 0:
+            counts = dct_splits(n, c, spread, angles.shape[0])[index]
+            split, err = fit_dct_coefficients(angles, directions, counts)
+        if err < bone_rms_deg(eigen, directions):
+            return "dct", split, numbers
         return "eigen", eigen, numbers
     order = book.dct_order.get(float(rate), tuple(range(c)))
     dct = dct_rebuild_counts(angles, dct_counts(n, c, order))

@@ -47,6 +47,9 @@ SEARCH_FAMILIES: tuple[str, ...] = (
     "projection",
     "eigen",
     "eigen/dct",
+    "eigen/dct-fit1",
+    "eigen/dct-fit2",
+    "eigen/dct-fit3",
 )
 #: Budgets (numbers per second of movement) of the nested table.
 BUDGETS: tuple[float, ...] = (10, 12, 16, 20)
