@@ -551,8 +551,8 @@ def report(folder: Path, variants: bool = False) -> tuple[str, dict[str, float]]
                 f"{mean4(pts, both):.1f} | {mean4(raw, both, cam):.1f} | "
                 f"{mean4(pts, both, cam):.1f} |"
             )
-            figures[f"{v.stem}: bone RMS, mean of 4, body frame, before the repair (°)"] = (
-                mean4(raw, both)
+            figures[f"{v.stem}: bone RMS, mean of 4, body frame, before the repair (°)"] = mean4(
+                raw, both
             )
 
         need = [i for t_ in ARMS.values() for i in t_] + list(HIPS.values())

@@ -66,6 +66,7 @@ OP_CORE = [0, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16]
 OP_PAIRS = ((1, 2), (3, 4), (5, 6), (7, 8), (9, 10), (11, 12), (13, 14), (15, 16), (19, 22))
 OP_PAIRS += ((20, 23), (21, 24))
 OPENPOSE_COMMIT = "bd9bbb6"
+OPENPOSE_DIR = "Pose2Sim/S01_Demo_SingleTrial/pose"
 SCENE_COMMIT = "eca0229"
 #: Pose2Sim's likelihood threshold for OpenPose keypoints (its Config.toml), and ours.
 OP_MIN_CONF, MP_MIN_CONF = 0.3, 0.5
@@ -88,7 +89,9 @@ def registration(git_dir: Path, folder: Path) -> None:
     print("|---|---|---|---|---|---|---|---|")
     cams = {c.name: c for c in read_qca(folder / "Calib.qca.txt")}
     for name in NAMES:
-        png = git_show(git_dir, f"HEAD:Pose2Sim/Demo_SinglePerson/calibration/extrinsics/{name}_ext.png")
+        png = git_show(
+            git_dir, f"HEAD:Pose2Sim/Demo_SinglePerson/calibration/extrinsics/{name}_ext.png"
+        )
         ref = cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_GRAYSCALE)
         cap = cv2.VideoCapture(str(folder / f"{name}.mp4"))
         ok, frame = cap.read()
@@ -99,7 +102,9 @@ def registration(git_dir: Path, folder: Path) -> None:
         sift = cv2.SIFT_create(4000)
         k1, d1 = sift.detectAndCompute(ref, None)
         k2, d2 = sift.detectAndCompute(vid, None)
-        good = [a for a, b in cv2.BFMatcher().knnMatch(d1, d2, k=2) if a.distance < 0.7 * b.distance]
+        good = [
+            a for a, b in cv2.BFMatcher().knnMatch(d1, d2, k=2) if a.distance < 0.7 * b.distance
+        ]
         p1 = np.float32([k1[g.queryIdx].pt for g in good])
         p2 = np.float32([k2[g.trainIdx].pt for g in good])
         _, inl = cv2.estimateAffine2D(p1, p2, ransacReprojThreshold=2.0)
@@ -128,7 +133,7 @@ def openpose(git_dir: Path, mp_image: Array) -> tuple[Array, Array]:
     conf = np.zeros((t, 25, len(NAMES)))
     for v, name in enumerate(NAMES):
         for f in range(t):
-            spec = f"{OPENPOSE_COMMIT}:Pose2Sim/S01_Demo_SingleTrial/pose/{name}_json/{name}.{f:04d}.json"
+            spec = f"{OPENPOSE_COMMIT}:{OPENPOSE_DIR}/{name}_json/{name}.{f:04d}.json"
             people = json.loads(git_show(git_dir, spec))["people"]
             ref = np.nanmean(mp_image[f, MP_CORE, v], axis=0)
             best, dist = None, np.inf
@@ -158,12 +163,15 @@ def all_views(cams: list[Camera], points: Array, pixels: Array, conf: Array, mc:
 def row(label: str, cams: list[Camera], data: dict[str, tuple[Array, Array, tuple, float]]) -> str:
     cells = []
     for pix, conf, pairs, mc in data.values():
-        loose = triangulate_keypoints(cams, pix, conf, min_confidence=mc, pairs=pairs, max_reprojection=None)
+        loose = triangulate_keypoints(
+            cams, pix, conf, min_confidence=mc, pairs=pairs, max_reprojection=None
+        )
         robust = triangulate_keypoints(cams, pix, conf, min_confidence=mc, pairs=pairs)
+        every = all_views(cams, robust.points, robust.pixels, robust.confidence, mc)
         cells += [
             f"{np.nanmedian(loose.reprojection):.2f}",
             f"{np.nanmedian(robust.reprojection):.2f}",
-            f"{np.nanmedian(all_views(cams, robust.points, robust.pixels, robust.confidence, mc)):.2f}",
+            f"{np.nanmedian(every):.2f}",
         ]
     return f"| {label} | " + " | ".join(cells) + " |"
 
@@ -245,7 +253,8 @@ def report(git_dir: Path, folder: Path) -> str:
             "QCA, not fitted (the 1088-px calibration used on the 1080-px videos)": unfitted,
             "QCA fitted, no distortion": [dataclasses.replace(c, dist=np.zeros(5)) for c in fitted],
             "QCA fitted, distortion not divided by 64": [
-                dataclasses.replace(c, dist=c.dist * np.array([64.0, 64, 64, 64, 1])) for c in fitted
+                dataclasses.replace(c, dist=c.dist * np.array([64.0, 64, 64, 64, 1]))
+                for c in fitted
             ],
             "Pose2Sim's Calib_scene.toml (checkerboard + 8 scene points), fitted": [
                 c.fitted_to(s) for c, s in zip(scene, sizes, strict=True)
@@ -263,7 +272,12 @@ def report(git_dir: Path, folder: Path) -> str:
         )
         print("|---|---|---|---|---|---|---|---|")
         swapfix = triangulate_keypoints(
-            fitted, op_pix, op_conf, min_confidence=OP_MIN_CONF, pairs=OP_PAIRS, max_reprojection=None
+            fitted,
+            op_pix,
+            op_conf,
+            min_confidence=OP_MIN_CONF,
+            pairs=OP_PAIRS,
+            max_reprojection=None,
         )
         for kind, npar in PARAMS.items():
             x = fit(fitted, swapfix.pixels, swapfix.confidence, OP_MIN_CONF, kind)
@@ -279,7 +293,9 @@ def report(git_dir: Path, folder: Path) -> str:
 def read_toml_scene(git_dir: Path) -> list[Camera]:
     import tempfile
 
-    text = git_show(git_dir, f"{SCENE_COMMIT}:Pose2Sim/Demo_SinglePerson/calibration/Calib_scene.toml")
+    text = git_show(
+        git_dir, f"{SCENE_COMMIT}:Pose2Sim/Demo_SinglePerson/calibration/Calib_scene.toml"
+    )
     with tempfile.TemporaryDirectory() as tmp:
         p = Path(tmp) / "Calib_scene.toml"
         p.write_bytes(text)

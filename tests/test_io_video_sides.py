@@ -63,7 +63,9 @@ def test_exchanged_runs_are_found_and_put_back():
     flipped[50] = True
     flipped[60:72] = True
     _mirror(image, world, flipped)
-    found = side_exchanges(image, np.ones((90, 33)), np.ones(90, bool), CONTINUITY_PAIRS["blazepose33"])
+    found = side_exchanges(
+        image, np.ones((90, 33)), np.ones(90, bool), CONTINUITY_PAIRS["blazepose33"]
+    )
     np.testing.assert_array_equal(found, flipped)
     fixed, frames = repair_side_exchanges(_poses(image, world))
     np.testing.assert_array_equal(frames, flipped)
@@ -105,7 +107,9 @@ def test_an_exchange_back_while_the_sides_overlap_is_seen_after_it():
     flipped = np.zeros(60, dtype=bool)
     flipped[20:40] = True  # back to the right labels at frame 40, inside the overlap
     _mirror(image, world, flipped)
-    found = side_exchanges(image, np.ones((60, 33)), np.ones(60, bool), CONTINUITY_PAIRS["blazepose33"])
+    found = side_exchanges(
+        image, np.ones((60, 33)), np.ones(60, bool), CONTINUITY_PAIRS["blazepose33"]
+    )
     np.testing.assert_array_equal(found[:38], flipped[:38])
     np.testing.assert_array_equal(found[43:], flipped[43:])  # the switch back was seen
 
@@ -124,6 +128,4 @@ def test_frames_without_a_person_start_a_new_run_and_low_confidence_is_ignored()
     assert not found[:20].any()
     assert found[21:25].all() and not found[25:].any()
     conf[:, [11, 12, 13, 14, 15, 16, 23, 24, 25, 26, 27, 28]] = 0.1
-    assert not side_exchanges(
-        image, conf, np.ones(40, bool), CONTINUITY_PAIRS["blazepose33"]
-    ).any()
+    assert not side_exchanges(image, conf, np.ones(40, bool), CONTINUITY_PAIRS["blazepose33"]).any()

@@ -99,15 +99,24 @@ def side_exchanges(
         # prev: the last decisive frame of this run.
         lp, rp, lt, rt = image[prev, left], image[prev, right], image[i, left], image[i, right]
         w = np.minimum.reduce(
-            [confidence[prev, left], confidence[prev, right], confidence[i, left], confidence[i, right]]
+            [
+                confidence[prev, left],
+                confidence[prev, right],
+                confidence[i, left],
+                confidence[i, right],
+            ]
         )
         ok = (w >= min_confidence) & np.isfinite(lp + rp + lt + rt).all(axis=1)
         runs[-1].append(i)
         state[i] = state[prev]
         if not ok.any():
             continue
-        keep = np.sum(w[ok] * (np.linalg.norm(lt - lp, axis=1) + np.linalg.norm(rt - rp, axis=1))[ok])
-        cross = np.sum(w[ok] * (np.linalg.norm(lt - rp, axis=1) + np.linalg.norm(rt - lp, axis=1))[ok])
+        keep = np.sum(
+            w[ok] * (np.linalg.norm(lt - lp, axis=1) + np.linalg.norm(rt - rp, axis=1))[ok]
+        )
+        cross = np.sum(
+            w[ok] * (np.linalg.norm(lt - rp, axis=1) + np.linalg.norm(rt - lp, axis=1))[ok]
+        )
         if cross < EXCHANGE_RATIO * keep:
             state[i] = ~state[prev]
         elif not keep < EXCHANGE_RATIO * cross:
@@ -146,9 +155,7 @@ def repair_side_exchanges(
             arr[frames, a], arr[frames, b] = arr[frames, b].copy(), arr[frames, a].copy()
     if reflect_depth:
         hips = HIPS.get(layout)
-        centre = (
-            world[frames][:, list(hips), 2].mean(axis=1, keepdims=True) if hips else 0.0
-        )
+        centre = world[frames][:, list(hips), 2].mean(axis=1, keepdims=True) if hips else 0.0
         world[frames, :, 2] = 2 * centre - world[frames, :, 2]
     meta = dict(poses.meta)
     meta["side_exchanges"] = int(frames.sum())
