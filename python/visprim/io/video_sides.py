@@ -9,10 +9,11 @@ On the shared Pose2Sim clip it happens in 29 of cam02's 96 frames (the four-view
 
 The rule (:func:`side_exchanges`), per run of consecutive frames with a person:
 
-1. Between each frame and the previous one, compare the image positions of the left/right
-   pairs of the limbs and torso (:data:`CONTINUITY_PAIRS`: shoulders, elbows, wrists, hips,
-   knees, ankles) both ways: ``keep`` = Σ w (|L_t − L_p| + |R_t − R_p|) and ``cross`` =
-   Σ w (|L_t − R_p| + |R_t − L_p|), ``w`` the lower confidence of the two frames (pairs below
+1. Between each frame and the previous decisive one (``p``; see below), compare the image
+   positions of the left/right pairs of the limbs and torso (:data:`CONTINUITY_PAIRS`:
+   shoulders, elbows, wrists, hips, knees, ankles) both ways:
+   ``keep = Σ w (‖L_t − L_p‖ + ‖R_t − R_p‖)`` and ``cross = Σ w (‖L_t − R_p‖ + ‖R_t − L_p‖)``,
+   ``w`` the lower confidence of the two frames (pairs below
    ``min_confidence`` in either frame are left out). The labels exchanged between the two
    frames when ``cross < EXCHANGE_RATIO · keep`` (the points much nearer their opposites'
    previous places than their own), and were kept when ``keep < EXCHANGE_RATIO · cross``.
