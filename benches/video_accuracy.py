@@ -29,6 +29,13 @@ set, load average; the machine is shared):
    Frames: those where the view's keypoints are confident (≥ 0.5) and the reference exists.
    Baseline beside them: a constant pose, each bone along the reference's own clip-mean
    direction (no per-frame information; optimistic, since it uses the reference).
+   The single view is read as ``read_video`` reads it: frames whose left/right labels the
+   estimator exchanged put back (:mod:`visprim.io.video_sides`); a table gives each view's
+   error before and after, and how the repaired frames compare with the four-view check's
+   flips (an independent judge). A second table checks the comparison itself: the error on
+   the frames whose reference arm and hip points each come from ≥ 3 views, in the world frame
+   (no torso frame), and the torso frame's own error. Cameras are fitted to their videos'
+   frames (:meth:`visprim.io.calibration.Camera.fitted_to`) throughout.
 3. **Jitter.** The clip has no still part (the rule "every reference wrist slower than
    :data:`STILL_SPEED`" is reported with the frames it finds), so jitter is measured as the
    high-pass residual of each bone direction: the angle between the direction at frame t and
