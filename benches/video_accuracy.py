@@ -29,6 +29,13 @@ set, load average; the machine is shared):
    Frames: those where the view's keypoints are confident (≥ 0.5) and the reference exists.
    Baseline beside them: a constant pose, each bone along the reference's own clip-mean
    direction (no per-frame information; optimistic, since it uses the reference).
+   The single view is read as ``read_video`` reads it: frames whose left/right labels the
+   estimator exchanged put back (:mod:`visprim.io.video_sides`); a table gives each view's
+   error before and after, and how the repaired frames compare with the four-view check's
+   flips (an independent judge). A second table checks the comparison itself: the error on
+   the frames whose reference arm and hip points each come from ≥ 3 views, in the world frame
+   (no torso frame), and the torso frame's own error. Cameras are fitted to their videos'
+   frames (:meth:`visprim.io.calibration.Camera.fitted_to`) throughout.
 3. **Jitter.** The clip has no still part (the rule "every reference wrist slower than
    :data:`STILL_SPEED`" is reported with the frames it finds), so jitter is measured as the
    high-pass residual of each bone direction: the angle between the direction at frame t and
@@ -64,6 +71,7 @@ from visprim.io.assemble import torso_frame
 from visprim.io.calibration import Camera, read_calibration
 from visprim.io.keypoints import smooth_keypoints
 from visprim.io.video_pose import VideoPoses, video_poses
+from visprim.io.video_sides import repair_side_exchanges
 from visprim.io.views import SIDE_PAIRS, MultiView, _reproject, estimate_offsets, triangulate_poses
 from visprim.params import (
     TRIANGULATION_MAX_REPROJECTION_PX,
@@ -239,7 +247,7 @@ def view_shifts(
             dataclasses.replace(q, image=q.image - b) for q, b in zip(poses, shifts, strict=True)
         ]
         mv = triangulate_poses(moved, cameras)
-        for i, cam in enumerate(cameras):
+        for i, cam in enumerate(mv.cameras):  # fitted to the frames
             res = mv.pixels[:, :, i] - cam.project(mv.points)
             used = np.isfinite(mv.reprojection[:, :, i])
             shifts[i] += np.nanmedian(res[used], axis=0)
@@ -274,14 +282,22 @@ def report(folder: Path, variants: bool = False) -> tuple[str, dict[str, float]]
             f"estimator {poses[0].meta.get('estimator')}"
         )
         print("\n## person found")
-        print("| view | person found | size (px) |")
-        print("|---|---|---|")
-        for v, q in zip(views, poses, strict=True):
-            print(f"| {v.stem} | {100 * q.found[:n].mean():.0f} % | {q.size[0]}×{q.size[1]} |")
+        print("| view | person found | video size (px) | calibrated size (px) |")
+        print("|---|---|---|---|")
+        for v, q, c in zip(views, poses, cameras, strict=True):
+            print(
+                f"| {v.stem} | {100 * q.found[:n].mean():.0f} % | {q.size[0]}×{q.size[1]} | "
+                f"{c.size[0]}×{c.size[1]} |"
+            )
+        print(
+            "\nA video of another size than its calibration uses the camera fitted to the "
+            "frame (uniform scale, centred: letterbox; visprim.io.calibration.Camera.fitted_to)."
+        )
 
         plain = triangulate_poses(poses, cameras, swaps=False, max_reprojection=None)
         swapped = triangulate_poses(poses, cameras, swaps=True, max_reprojection=None)
         robust = triangulate_poses(poses, cameras)  # the default of read_views
+        fitted = robust.cameras  # each camera fitted to its video's frame size
         print(
             "\n## four-view triangulation: reprojection error (px), all 33 keypoints\n\n"
             "used: the observations each point was triangulated from; all views: every "
@@ -449,7 +465,9 @@ def report(folder: Path, variants: bool = False) -> tuple[str, dict[str, float]]
         a, b = still_part(np.where(ref_ok[:, None, None], ref, np.nan), rate)
         print(
             "\n## each camera vs the four-view reference (both arms; RMS over confident frames)"
-            "\n\nbody frame: directions relative to each skeleton's torso; world: the camera's "
+            "\n\nThe single view as read_video reads it: frames whose left/right labels the "
+            "estimator exchanged are put back (visprim.io.video_sides; before/after below). "
+            "body frame: directions relative to each skeleton's torso; world: the camera's "
             "directions rotated by its extrinsics (MediaPipe world axes ≈ camera axes)."
         )
         print(
@@ -475,7 +493,13 @@ def report(folder: Path, variants: bool = False) -> tuple[str, dict[str, float]]
                 f"{ew[f'{side}_upper']:.1f} | {ew[f'{side}_fore']:.1f} | — |"
             )
         monos = []
-        for v, q, cam in zip(views, poses, cameras, strict=True):
+        raw_monos = []
+        repaired = []
+        for q in poses:
+            q2, frames = repair_side_exchanges(q)
+            repaired.append((q2, frames))
+            raw_monos.append(mono_points(q, n))
+        for v, (q, _), cam in zip(views, repaired, fitted, strict=True):
             pts, ok = mono_points(q, n)
             valid = ok & ref_ok
             monos.append((pts, valid))
@@ -495,17 +519,6 @@ def report(folder: Path, variants: bool = False) -> tuple[str, dict[str, float]]
                     f"{ew[f'{side}_upper']:.1f} | {ew[f'{side}_fore']:.1f} | {torso:.1f} |"
                 )
 
-        print(
-            "\nside flips (diagnostic): frames where the four-view check exchanged at least half "
-            "of this view's left/right pairs, and the single camera's error (mean of the four "
-            "bone RMS, °) on the other frames, on those frames, and on all frames with those "
-            "frames' sides exchanged back (what a perfect single-view flip detector would give)"
-        )
-        print(
-            "| view | flipped frames | body: other frames | body: flipped frames | "
-            "body: all, flips undone | world: all | world: all, flips undone |"
-        )
-        print("|---|---|---|---|---|---|---|")
         npairs = len(SIDE_PAIRS["blazepose33"])
         four = ("right_upper", "right_fore", "left_upper", "left_fore")
 
@@ -519,18 +532,62 @@ def report(folder: Path, variants: bool = False) -> tuple[str, dict[str, float]]
                 e = errors(bones(p_, body_frame(p_)), ref_body, sel)
             return float(np.mean([e[k_] for k_ in four]))
 
-        for vi, (v, (pts, valid), cam) in enumerate(zip(views, monos, cameras, strict=True)):
+        print(
+            "\n### left/right exchanges in the single view: before / after the repair\n\n"
+            "four-view flips: frames where the four-view check exchanged at least half of this "
+            "view's left/right pairs (an independent judge: the other three views); repair: "
+            "the frames the single-view rule (image continuity, visprim.io.video_sides) puts "
+            "back, how many of them are four-view flips, and the four-view flips it misses. "
+            "Error: mean of the four bone RMS (°), on the frames valid before and after."
+        )
+        print(
+            "| view | four-view flips | repaired | of them four-view flips | missed | "
+            "body: before | body: after | world: before | world: after |"
+        )
+        print("|---|---|---|---|---|---|---|---|---|")
+        for vi, (v, (raw, raw_ok), (pts, valid), (_, frames), cam) in enumerate(
+            zip(views, raw_monos, monos, repaired, fitted, strict=True)
+        ):
             flip = robust.swapped[:, vi] * 2 >= npairs
-            undone = pts.copy()
-            for la, ra in SIDE_PAIRS["blazepose33"]:
-                undone[flip, la], undone[flip, ra] = pts[flip, ra], pts[flip, la]
-
+            fr = frames[:n]
+            both = valid & raw_ok & ref_ok
             print(
-                f"| {v.stem} | {int((flip & valid).sum())} of {int(valid.sum())} | "
-                f"{mean4(pts, valid & ~flip):.1f} | {mean4(pts, valid & flip):.1f} | "
-                f"{mean4(undone, valid):.1f} | {mean4(pts, valid, cam):.1f} | "
-                f"{mean4(undone, valid, cam):.1f} |"
+                f"| {v.stem} | {int((flip & both).sum())} of {int(both.sum())} | "
+                f"{int((fr & both).sum())} | {int((fr & flip & both).sum())} | "
+                f"{int((~fr & flip & both).sum())} | {mean4(raw, both):.1f} | "
+                f"{mean4(pts, both):.1f} | {mean4(raw, both, cam):.1f} | "
+                f"{mean4(pts, both, cam):.1f} |"
             )
+            figures[f"{v.stem}: bone RMS, mean of 4, body frame, before the repair (°)"] = mean4(
+                raw, both
+            )
+
+        need = [i for t_ in ARMS.values() for i in t_] + list(HIPS.values())
+        three = ref_ok & (robust.views_used[:, need] >= 3).all(axis=1)
+        print(
+            "\n### does the comparison itself inflate the error?\n\n"
+            "The single view (repaired) against the reference: in the body frame on every "
+            "reference frame (the table above), on the frames whose reference arm and hip "
+            f"points each come from ≥ 3 views ({int(three.sum())} of {int(ref_ok.sum())}; a "
+            "point from 2 views cannot be checked by a third), in the world frame (no torso "
+            "frame: the camera's directions rotated by its extrinsics), and the torso frame's "
+            "own error (rotation angle between the two torso frames in the world, RMS)."
+        )
+        print(
+            "| view | body, all frames | body, ≥ 3-view frames | world, all frames | "
+            "world, ≥ 3-view frames | torso frame (°) |"
+        )
+        print("|---|---|---|---|---|---|")
+        for v, (pts, valid), cam in zip(views, monos, fitted, strict=True):
+            torso = _rms(
+                rotation_angle(np.einsum("ji,tjk->tik", cam.R, body_frame(pts)), ref_frame)[valid]
+            )
+            print(
+                f"| {v.stem} | {mean4(pts, valid):.1f} | {mean4(pts, valid & three):.1f} | "
+                f"{mean4(pts, valid, cam):.1f} | {mean4(pts, valid & three, cam):.1f} | "
+                f"{torso:.1f} |"
+            )
+            figures[f"{v.stem}: bone RMS, mean of 4, world frame (°)"] = mean4(pts, valid, cam)
 
         print(
             f"\n## jitter (high-pass residual of the bone directions, RMS, deg/frame)\n\n"

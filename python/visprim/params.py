@@ -576,6 +576,11 @@ VIEWS_SYNC_MAX_OFFSET_S: float = 0.2
 VIDEO_LOWPASS_HZ: float | None = None
 #: Butterworth order of that low-pass (forward and backward, so twice this in effect).
 VIDEO_LOWPASS_ORDER: int = 4
+#: Single-view reading (:func:`visprim.io.video.read_video_pieces`): put back the frames where
+#: the estimator took the person for their mirror image (left and right labels exchanged),
+#: found by the image continuity of the limbs (:mod:`visprim.io.video_sides`). On by
+#: measurement (benches/video_accuracy.py, docs/video.rst).
+VIDEO_REPAIR_SIDES: bool = True
 
 
 # ---------------------------------------------------------------------------- online pipeline

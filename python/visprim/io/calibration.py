@@ -27,6 +27,27 @@ world → camera, rad), ``translation`` (m) and ``fisheye`` (only ``false`` is s
 tables without ``matrix`` (``metadata``...) are skipped. Validated in the tests by reading
 the QCA file converted with Pose2Sim's formulas (``calib_qca_fun``) and comparing the
 projections of the same 3-D points through both readers.
+
+**A video frame of another size than the calibrated image** (:meth:`Camera.fitted_to`,
+applied by :func:`visprim.io.views.triangulate_poses` wherever a view's frame size differs
+from its camera's ``size``): the calibrated image is taken to have been scaled uniformly to
+fit inside the frame and centred, the rest padded (letterbox / pillarbox: what ffmpeg's
+``scale=W:H:force_original_aspect_ratio=decrease,pad=W:H:(ow-iw)/2:(oh-ih)/2`` and most
+editors' "fit" make). With ``s = min(W'/W, H'/H)`` and offsets ``o = ((W' − sW)/2,
+(H' − sH)/2)``, a calibrated pixel ``p`` (pixel centres at integers) lands at
+``s·(p + ½) − ½ + o``: ``K``'s focal lengths scale by ``s`` and its principal point maps
+like a pixel; distortion, in normalised coordinates, is unchanged. A frame of the
+calibration's aspect ratio is a plain scale (``o = 0``), e.g. a half-size copy.
+
+The shared Pose2Sim clip needs it: its calibration is 1088 × 1920 px for every camera, and
+cam01/cam02's videos are 1080 × 1920 with 7 black rows above and below the picture.
+Registering their first frame to Pose2Sim's own 1088 × 1920 image of the same camera
+(``calibration/extrinsics/cam0N_ext.png`` in Pose2Sim's ``Demo_SinglePerson``; SIFT matches,
+affine fit, 0.4–0.5 px residual) gives ``u' = 0.9928 u − 0.02``, ``v' = 0.9926 v + 7.2``
+(cam01) and ``0.9926 u + 0.09``, ``0.9926 v + 7.19`` (cam02), against the rule's
+``0.9926 u − 0.004``, ``0.9926 v + 7.05``; cam03/cam04's 1088 × 1920 videos register to
+their images as the identity (scale 1.0000, offsets < 0.1 px). Without the fit, cam01/02's
+keypoints are off by up to 7 px (about 4 px at the person, near the image centre).
 """
 
 from __future__ import annotations
@@ -41,7 +62,7 @@ from numpy.typing import NDArray
 
 from visprim.io.errors import MalformedFileError, ReadError
 
-__all__ = ["Camera", "read_calibration", "read_qca", "read_toml", "rodrigues"]
+__all__ = ["Camera", "frame_fit", "read_calibration", "read_qca", "read_toml", "rodrigues"]
 
 _RX_PI = np.diag([1.0, -1.0, -1.0])
 #: QCA distortion coefficients are stored × 64 (Pose2Sim's convention, see the module docstring).
@@ -61,6 +82,24 @@ class Camera:
     dist: NDArray[np.float64]
     R: NDArray[np.float64]
     t: NDArray[np.float64]
+
+    def fitted_to(self, size: tuple[int, int]) -> Camera:
+        """This camera for a video frame of ``size`` (width, height) px into which its
+        calibrated image was scaled uniformly and centred (see the module docstring);
+        ``self`` when the sizes are equal."""
+        w, h = int(size[0]), int(size[1])
+        if w <= 0 or h <= 0:
+            raise ValueError(f"frame size must be positive, got {size!r}")
+        if (w, h) == tuple(self.size):
+            return self
+        s, ox, oy = frame_fit(self.size, (w, h))
+        k = self.K.copy()
+        k[0, 0] *= s
+        k[1, 1] *= s
+        k[0, 1] *= s
+        k[0, 2] = s * (k[0, 2] + 0.5) - 0.5 + ox
+        k[1, 2] = s * (k[1, 2] + 0.5) - 0.5 + oy
+        return Camera(name=self.name, size=(w, h), K=k, dist=self.dist, R=self.R, t=self.t)
 
     @property
     def projection(self) -> NDArray[np.float64]:
@@ -112,6 +151,15 @@ class Camera:
             dy = p1 * (r2 + 2 * y * y) + 2 * p2 * x * y
             xy = np.stack([(xd[..., 0] - dx) / radial, (xd[..., 1] - dy) / radial], axis=-1)
         return xy
+
+
+def frame_fit(calibrated: tuple[int, int], frame: tuple[int, int]) -> tuple[float, float, float]:
+    """Scale ``s`` and offsets ``(ox, oy)`` px of a calibrated image (width, height) fitted
+    uniformly and centred into a frame (width, height) (see the module docstring)."""
+    cw, ch = float(calibrated[0]), float(calibrated[1])
+    fw, fh = float(frame[0]), float(frame[1])
+    s = min(fw / cw, fh / ch)
+    return s, (fw - s * cw) / 2, (fh - s * ch) / 2
 
 
 def _float(path: Path, el: ET.Element, key: str) -> float:

@@ -12,6 +12,9 @@
   :func:`visprim.io.keypoints.trial_pieces_from_keypoints`: shoulder, elbow, wrist and hand
   of each arm, the torso frame from shoulders and hips, the subject turned to face +x.
 * Times come from the video's own clock (each frame's presentation timestamp).
+* Frames where the estimator took the person for their mirror image (left and right labels
+  exchanged) are put back, found by the image continuity of the limbs
+  (:mod:`visprim.io.video_sides`; ``repair_sides=False`` keeps the estimator's labels).
 * Frames without a person, and landmarks below ``min_confidence`` visibility, are gaps with
   the C3D policy (:mod:`visprim.io.gaps`): short ones filled, long ones split or refused.
 
@@ -36,6 +39,8 @@ import numpy as np
 from visprim.io.errors import ReadError
 from visprim.io.keypoints import read_error, trial_pieces_from_keypoints
 from visprim.io.video_pose import PoseEstimator, VideoPoses, video_poses
+from visprim.io.video_sides import repair_side_exchanges
+from visprim.params import VIDEO_REPAIR_SIDES
 from visprim.trial import Trial
 
 #: A jump of the hips' image position by more than this fraction of the image diagonal
@@ -70,6 +75,7 @@ def read_video_pieces(
     on_gap: str = "split",
     gap_method: str = "cubic",
     min_duration: float = 0.5,
+    repair_sides: bool = VIDEO_REPAIR_SIDES,
 ) -> list[Trial]:
     """Trials from a video (several when long gaps without a person split it).
 
@@ -85,6 +91,8 @@ def read_video_pieces(
     min_confidence : landmarks with a lower visibility are missing in that frame
     max_frames : only the first frames
     cache : use the pose cache
+    repair_sides : put back frames whose left/right labels the estimator exchanged
+        (:mod:`visprim.io.video_sides`; default :data:`visprim.params.VIDEO_REPAIR_SIDES`)
     """
     p = Path(path)
     poses = video_poses(
@@ -95,6 +103,10 @@ def read_video_pieces(
     if found == 0:
         raise ReadError(p, f"no person found in any of the {n} frames")
     layout = str(poses.meta["layout"])
+    exchanged = 0
+    if repair_sides:
+        poses, frames = repair_side_exchanges(poses, min_confidence=min_confidence)
+        exchanged = int(frames.sum())
     people = int(poses.meta.get("people", 0))
     if people > 1:
         at = poses.times[int(poses.meta["people_frame"])]
@@ -123,6 +135,7 @@ def read_video_pieces(
         "people": people,
         "pose_passes": poses.meta.get("passes"),
         "pose_cache": poses.meta.get("cache"),
+        "side_exchanges_repaired": exchanged if repair_sides else None,
     }
     try:
         return trial_pieces_from_keypoints(

@@ -436,9 +436,11 @@ def estimate_offsets(
     inconsistency: the largest ``|o_b − o_a − d_ab|`` (frames; 0 when the pairs agree, as
     for a true shift of exact keypoints). Motion is what makes offsets visible; on a still
     scene every offset scores alike and 0 is kept. Cost: ``V(V−1)/2 · (2·max_offset + 1)``
-    median distances over the clip.
+    median distances over the clip. Cameras are fitted to their views' frame sizes as in
+    :func:`triangulate_poses`.
     """
     v = len(poses)
+    cameras = [c.fitted_to(q.size) for c, q in zip(cameras, poses, strict=True)]
     if max_offset < 0:
         raise ValueError(f"max_offset must be >= 0 frames, got {max_offset!r}")
     n = min(q.times.shape[0] for q in poses)
@@ -536,6 +538,11 @@ def triangulate_poses(
     for it: ``meta["sync"]["max_offset"]`` says how far; :func:`estimate_offsets`);
     a sequence gives the offsets (frames, view v's frame ``i + o[v]`` ↔ the first view's
     frame i; relative to the first). The times are the first view's clock.
+
+    A view whose frame size differs from its camera's calibrated ``size`` uses the camera
+    fitted to the frame (:meth:`visprim.io.calibration.Camera.fitted_to`: the calibrated
+    image scaled uniformly and centred, letterbox / pillarbox); ``meta["calibrated_sizes"]``
+    and ``meta["frame_sizes"]`` record both; the result's ``cameras`` are the fitted ones.
     """
     if len(poses) != len(cameras) or len(poses) < 2:
         raise ValueError(
@@ -545,6 +552,8 @@ def triangulate_poses(
     if len(layouts) != 1:
         raise ValueError(f"the views have different keypoint layouts: {sorted(layouts)}")
     layout = layouts.pop()
+    calibrated = [tuple(c.size) for c in cameras]
+    cameras = [c.fitted_to(q.size) for c, q in zip(cameras, poses, strict=True)]
     k = min(q.image.shape[1] for q in poses)
     pairs = [(a, b) for a, b in SIDE_PAIRS.get(layout, ()) if a < k and b < k] if swaps else []
     offsets, sync_record = _offsets(
@@ -567,6 +576,8 @@ def triangulate_poses(
         "format": "video views",
         "views": list(views),
         "cameras": [c.name for c in cameras],
+        "calibrated_sizes": [list(sz) for sz in calibrated],
+        "frame_sizes": [list(q.size) for q in poses],
         "frames": n,
         "offsets": list(offsets),
         "sync": sync_record,
