@@ -281,6 +281,15 @@ class OnlineSegmenter:
         self.bone_directions: NDArray[np.float64] = np.zeros((0, 6 * len(self.arms)))
         self._vector_periodic = periodic_channels(self.features, len(self.arms))
         self._n_channels = int(model.n_channels)
+        # The fitted projection and centres, taken once: a closed segment is projected and
+        # assigned here directly (model.transform's input checks cost more than the product).
+        basis = model.basis_
+        #: ``E_f`` (d, f) and ``s̄ E_f`` (f,): ``p = s E_f − s̄ E_f`` (:meth:`PCABasis.project`).
+        self._components = np.ascontiguousarray(basis.components(int(model.n_components)))
+        self._mean_projection = basis.mean @ self._components
+        self._centres = np.ascontiguousarray(model.cluster_centers_, dtype=np.float64)
+        #: Each primitive's rebuilt vector (offsets="mean"'s amplitude), computed once.
+        self._rebuilt: dict[int, NDArray[np.float64]] = {}
         self._ring: FrameRing | None = None
         self._raw: FrameRing | None = None
         self._times: FrameRing | None = None
@@ -628,13 +637,20 @@ class OnlineSegmenter:
         return t0 - (first - f) * (t1 - t0)
 
     def _segment_values(self, a: int, b: int, upto: int) -> NDArray[np.float64]:
-        """Values of frames ``[a, b]``: causal, or the raw angles of ``[a − _LEAD, upto)``
-        through the model's zero-phase filter (module docstring)."""
+        """Values of the segment between the filtered frames ``a`` and ``b``: the causal
+        values of ``[a, b]``, or the raw angles of ``[a' − _LEAD, upto)`` through the model's
+        zero-phase filter, kept on ``[a', b']``, the raw frames where the segment's reported
+        times are (``a − shift``, ``b − shift``: :meth:`_movement_time`; the causal values
+        lag the raw frames by the filter's delay, the zero-phase ones do not) (module
+        docstring)."""
         assert self._ring is not None
         if self._raw is None:
             return self._ring.window(a, b + 1)
+        ra = max(self._raw.start, a - self._shift)
+        rb = b if self._final and b == self.n_frames - 1 else b - self._shift
+        rb = max(rb, ra + 1)
         upto = min(upto, self._raw.end)
-        lo = max(self._raw.start, a - _LEAD)
+        lo = max(self._raw.start, ra - _LEAD)
         raw = self._raw.window(lo, upto)
         smooth = lowpass(
             raw,
@@ -642,7 +658,15 @@ class OnlineSegmenter:
             cutoff=float(self.model.cutoff),
             short="reduce",
         )
-        return from_angles(smooth[a - lo : b + 1 - lo], self.features)
+        return from_angles(smooth[ra - lo : rb + 1 - lo], self.features)
+
+    def _project(self, vectors: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Projections ``(N, f)`` of segment vectors ``(N, d)`` (radians): ``s E_f − s̄ E_f``,
+        :meth:`~visprim.model.PrimitiveModel.transform`'s formula without its input checks
+        (the vectors are the resampler's, float64 and C-ordered) or its one-thread BLAS
+        context (a vector-matrix product has no thread-dependent summation; equal to
+        ``transform`` in ``tests/test_online_close.py``)."""
+        return np.asarray(vectors @ self._components - self._mean_projection)
 
     def _close(self, a: int, b: int, emitted: float, *, forced: bool, upto: int) -> SegmentClosed:
         assert self._ring is not None
@@ -652,7 +676,7 @@ class OnlineSegmenter:
         sv = vectors_from_frames(
             values,
             [0.0],
-            [float(b - a)],
+            [float(values.shape[0] - 1)],
             trial=[0],
             starts=[start],
             ends=[end],
@@ -660,12 +684,14 @@ class OnlineSegmenter:
             periodic_channels=self._vector_periodic,
             offsets=str(self.model.offsets),
         )
-        p = self.model.transform(sv.vectors)
-        labels, dist = self.model.assign(p)
+        labels, dist = kernels.kmeans_predict(self._project(sv.vectors), self._centres)
         amplitude = 1.0
         if str(self.model.offsets) == "mean":
             k = int(labels[0])
-            rebuilt = self.model.cluster_centers_[k] @ self.model.components_.T + self.model.mean_
+            rebuilt = self._rebuilt.get(k)
+            if rebuilt is None:
+                rebuilt = self.model.cluster_centers_[k] @ self.model.components_.T
+                rebuilt = self._rebuilt[k] = rebuilt + self.model.mean_
             amplitude = float(amplitude_gains(sv.vectors, rebuilt[None, :])[0])
         index = self._n_seg
         self._n_seg += 1
