@@ -175,6 +175,24 @@ def frames_of(
     return Frames(t, m, j, f)
 
 
+def _checked(name: str, value: Any) -> Any:
+    """``value`` of the setting ``name`` checked against its declaration
+    (:data:`visprim.params.ONLINE_OPTIONS`): one of its ``choices``, or a positive finite
+    number for a setting in seconds."""
+    option = ONLINE_OPTIONS[name]
+    if option.choices is not None and value not in option.choices:
+        allowed = " or ".join(repr(c) for c in option.choices)
+        raise ValueError(f"{name} must be {allowed}, got {value!r}")
+    if option.unit == "s":
+        try:
+            ok = math.isfinite(value) and value > 0
+        except TypeError:
+            ok = False
+        if not ok:
+            raise ValueError(f"{name} must be a positive number of seconds, got {value!r}")
+    return value
+
+
 class OnlineSegmenter:
     """SEG-2 segments and their primitives, from frames pushed in chunks (module docstring).
 
@@ -219,10 +237,7 @@ class OnlineSegmenter:
         c = getattr(model, "seg2_threshold_", None)
         if c is None or not (c > 0):
             raise ValueError("the model has no fitted SEG-2 constant (seg2_threshold_)")
-        if segment_filter not in ("zero_phase", "causal"):
-            raise ValueError(
-                f"segment_filter must be 'zero_phase' or 'causal', got {segment_filter!r}"
-            )
+        segment_filter = _checked("segment_filter", segment_filter)
         self.segment_filter = segment_filter
         if confirm_frames is not None and not (
             isinstance(confirm_frames, int | np.integer) and confirm_frames >= 1
@@ -231,15 +246,10 @@ class OnlineSegmenter:
                 f"confirm_frames must be a number of frames ≥ 1 or None, got {confirm_frames!r}"
             )
         self.confirm_frames = None if confirm_frames is None else int(confirm_frames)
-        if threshold not in ("fixed", "adaptive"):
-            raise ValueError(f"threshold must be 'fixed' or 'adaptive', got {threshold!r}")
-        for name, v in (("rest_timeout", rest_timeout), ("max_segment", max_segment)):
-            if not (math.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be a positive number of seconds, got {v!r}")
-        if not (math.isfinite(speed_window) and speed_window > 0):
-            raise ValueError(
-                f"speed_window must be a positive number of seconds, got {speed_window!r}"
-            )
+        threshold = _checked("threshold", threshold)
+        rest_timeout = _checked("rest_timeout", rest_timeout)
+        max_segment = _checked("max_segment", max_segment)
+        speed_window = _checked("speed_window", speed_window)
         self.model = model
         self.arms = tuple(getattr(model, "arms_", ("right",)))
         self.features = str(model.features)
