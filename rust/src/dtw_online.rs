@@ -263,7 +263,7 @@ impl OnlineDtw {
             .reduce(f64::min);
         let confidence = match d2 {
             None => 1.0,
-            Some(d2) if !d1.is_finite() || !(d2 > 0.0) => 0.0,
+            Some(d2) if !d1.is_finite() || d2.is_nan() || d2 <= 0.0 => 0.0,
             Some(d2) => (1.0 - d1 / d2).max(0.0),
         };
         Ok((best, confidence, d1))
