@@ -11,7 +11,7 @@ old version's Python tree unpacked beside this one::
          --out /tmp/old_$r.md)
       PYTHONPATH=python python benches/bench_online.py --skip fidelity,memory --out /tmp/new_$r.md
     done
-    python benches/bench_online_ratio.py --old /tmp/old_*.json --new /tmp/new_*.json
+    python benches/bench_online_ratio.py --old /tmp/old_*.json --new /tmp/new_*.json [--cpu]
 
 Prints a Markdown table: per classifier and chunk, the median over the rounds of the
 frames/s (each run's own median) of both versions and of the ratio new/old of each round
@@ -27,19 +27,24 @@ from pathlib import Path
 from typing import Any
 
 
-def _rates(path: Path) -> tuple[dict[tuple[str, int], float], dict[str, Any]]:
+def _rates(path: Path, key: str) -> tuple[dict[tuple[str, int], float], dict[str, Any]]:
     blob = json.loads(path.read_text())
-    rows = {(r["classifier"], int(r["chunk"])): float(r["median"]) for r in blob["throughput"]}
+    rows = {(r["classifier"], int(r["chunk"])): float(r[key]) for r in blob["throughput"]}
     return rows, blob["stamp"]
 
 
-def table(old: list[Path], new: list[Path]) -> str:
+def table(old: list[Path], new: list[Path], key: str = "median") -> str:
+    """The ratio table of the rounds; ``key``: ``"median"`` (frames per wall second) or
+    ``"cpu_median"`` (frames per CPU-second of the process)."""
     if len(old) != len(new) or not old:
         raise SystemExit("need as many --old as --new result files (one per round)")
-    rounds = [(_rates(a), _rates(b)) for a, b in zip(sorted(old), sorted(new), strict=True)]
+    rounds = [
+        (_rates(a, key), _rates(b, key)) for a, b in zip(sorted(old), sorted(new), strict=True)
+    ]
     keys = list(rounds[0][0][0])
     lines = [
-        f"rounds: {len(rounds)} (old then new each round)",
+        f"rounds: {len(rounds)} (old then new each round); "
+        + ("frames per CPU-second" if key == "cpu_median" else "frames per wall second"),
         "",
         "| classifier | chunk | old frames/s | new frames/s | new / old (range) |",
         "|---|---:|---:|---:|---|",
@@ -70,8 +75,11 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--old", type=Path, nargs="+", required=True, help="old version's JSON files")
     ap.add_argument("--new", type=Path, nargs="+", required=True, help="new version's JSON files")
+    ap.add_argument(
+        "--cpu", action="store_true", help="ratio of frames per CPU-second (process time)"
+    )
     args = ap.parse_args(argv)
-    print(table(args.old, args.new))
+    print(table(args.old, args.new, "cpu_median" if args.cpu else "median"))
     return 0
 
 

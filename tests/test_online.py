@@ -158,21 +158,6 @@ def test_a_motion_classifier_gives_the_final_class_of_predict(fitted, hdm05) -> 
     assert {e.label for e in updates} <= set(clf.classes_.tolist())
 
 
-def test_the_zero_phase_segment_filter_brings_segments_closer_to_offline(fitted) -> None:
-    model, clf, test = fitted
-    distance = {}
-    for how in ("zero_phase", "causal"):
-        segs = [
-            e
-            for t in test
-            for e in OnlinePipeline(model, None, segment_filter=how).replay(t, chunk=9)
-            if isinstance(e, SegmentClosed)
-        ]
-        distance[how] = float(np.median([e.distance for e in segs]))
-    # Nearer the primitives learned from zero-phase filtered segments.
-    assert distance["zero_phase"] < distance["causal"], distance
-
-
 def test_replay_agrees_with_the_offline_pipeline(fitted) -> None:
     model, clf, test = fitted
     results = [compare_trial(model, t, clf, chunk=4) for t in test]

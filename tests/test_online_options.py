@@ -41,3 +41,29 @@ def test_watch_passes_only_the_settings_given():
         ["watch", "r.bvh", "--model", "m.npz", "--rest-timeout", "2", "--threshold", "fixed"]
     )
     assert online_options(args) == {"rest_timeout": 2.0, "threshold": "fixed"}
+
+
+def test_the_segmenter_checks_its_settings_against_their_declaration(monkeypatch):
+    """The choices and units the segmenter accepts are the declared ones: a choice added to
+    the declaration is accepted by the check, one removed is refused."""
+    import dataclasses
+
+    import pytest
+    from visprim.online import segmenter
+
+    with pytest.raises(ValueError, match="threshold must be 'adaptive' or 'fixed'"):
+        segmenter._checked("threshold", "median")
+    with pytest.raises(ValueError, match="segment_filter"):
+        segmenter._checked("segment_filter", "none")
+    for name in ("rest_timeout", "max_segment", "speed_window"):
+        assert ONLINE_OPTIONS[name].unit == "s"
+        for bad in (0.0, -1.0, float("nan"), float("inf"), "1"):
+            with pytest.raises(ValueError, match=f"{name} must be a positive number"):
+                segmenter._checked(name, bad)
+        assert segmenter._checked(name, 0.5) == 0.5
+    changed = dict(ONLINE_OPTIONS)
+    changed["threshold"] = dataclasses.replace(ONLINE_OPTIONS["threshold"], choices=("fixed",))
+    monkeypatch.setattr(segmenter, "ONLINE_OPTIONS", changed)
+    assert segmenter._checked("threshold", "fixed") == "fixed"
+    with pytest.raises(ValueError, match="must be 'fixed', got 'adaptive'"):
+        segmenter._checked("threshold", "adaptive")

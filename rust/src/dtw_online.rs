@@ -13,20 +13,50 @@
 //! * **Open end**: `min_j D(n − 1, j) / (n + j + 1)`, the query so far against the best-matching
 //!   *prefix* of the reference (the movement in progress against how each reference began);
 //!   the `j` reached is [`OnlineDtw::open_end`]'s position.
+//! * **Running class**: [`OnlineDtw::running`] gives the reference of the smallest open-end
+//!   cost and a confidence `1 − d₁ / d₂` against the best reference of another label, in one
+//!   pass over the rows (no per-reference array handed back).
+//!
+//! **Layout.** Each reference's frames are stored channel-major (value `c` of frame `j` of a
+//! reference of `m` frames at `c·m + j` within its block), so the local distances of a query
+//! frame to every frame of a reference are computed across `j` in SIMD lanes, each lane
+//! summing its channels in the offline kernel's order (`Σ_c (a_c − b_c)²`, channel 0 first,
+//! then the square root): the same bits as [`crate::dtw`]. The recursion then runs along the
+//! row, for four references at a time in lockstep (references grouped by length at
+//! construction), so that four independent chains of `D(i, j − 1) → D(i, j)` overlap in the
+//! processor; the open-end costs of the last frame of a push are taken along the way. Vector
+//! widths are chosen by [`crate::simd`]; every level gives the same bits (no fused
+//! multiply-add; the minima of the recursion are exact selections, values being never NaN).
 
 use crate::ragged::trial_bounds;
+use crate::simd::Level;
 use crate::{Error, Result};
 
 /// The DTW rows of one growing query against a set of references.
 #[derive(Debug, Clone)]
 pub struct OnlineDtw {
+    /// The references, channel-major within each reference's block (module docstring).
     references: Vec<f64>,
     dim: usize,
     bounds: Vec<(usize, usize)>,
     /// Row `n − 1` of every reference's table, concatenated like the references' frames.
     rows: Vec<f64>,
+    /// Local distances of the current query frame to every reference frame (scratch).
+    local: Vec<f64>,
+    /// References by groups of four in the recursion's lockstep, shortest first.
+    groups: Vec<Vec<usize>>,
+    /// Open-end cost of each reference after `open_at` query frames.
+    open: Vec<f64>,
+    open_at: usize,
     n: usize,
+    distances: Distances,
 }
+
+/// The local distances of one query frame to one reference's frames (module docstring).
+type Distances = fn(&[f64], &[f64], &mut [f64]);
+
+/// References in one lockstep group of the recursion.
+const LOCKSTEP: usize = 4;
 
 fn try_filled(len: usize, value: f64, what: &str) -> Result<Vec<f64>> {
     let mut v = Vec::new();
@@ -62,17 +92,31 @@ impl OnlineDtw {
             }
             other => other,
         })?;
-        let mut values = Vec::new();
-        values
-            .try_reserve_exact(references.len())
-            .map_err(|_| Error::Memory("cannot copy the references".into()))?;
-        values.extend_from_slice(references);
+        let level = crate::simd::level()?;
+        let mut values = try_filled(references.len(), 0.0, "the references")?;
+        for &(s, e) in &bounds {
+            let m = e - s;
+            let block = &mut values[s * dim..e * dim];
+            for (j, frame) in references[s * dim..e * dim].chunks_exact(dim).enumerate() {
+                for (c, &v) in frame.iter().enumerate() {
+                    block[c * m + j] = v;
+                }
+            }
+        }
+        let mut order: Vec<usize> = (0..bounds.len()).collect();
+        order.sort_by_key(|&r| (bounds[r].1 - bounds[r].0, r));
+        let groups = order.chunks(LOCKSTEP).map(|g| g.to_vec()).collect();
         Ok(Self {
             references: values,
             dim,
-            bounds,
             rows: try_filled(frames, f64::INFINITY, "the DTW rows")?,
+            local: try_filled(frames, 0.0, "the local distances")?,
+            groups,
+            open: try_filled(bounds.len(), f64::INFINITY, "the open-end costs")?,
+            open_at: 0,
+            bounds,
             n: 0,
+            distances: pick(level),
         })
     }
 
@@ -91,15 +135,20 @@ impl OnlineDtw {
         self.n
     }
 
-    /// Bytes held (references and rows): fixed at construction.
+    /// Bytes held (references, rows, scratch, groups): fixed at construction.
     pub fn memory_bytes(&self) -> usize {
-        (self.references.len() + self.rows.len()) * std::mem::size_of::<f64>()
-            + self.bounds.len() * std::mem::size_of::<(usize, usize)>()
+        let values = self.references.len() + self.rows.len() + self.local.len() + self.open.len();
+        values * std::mem::size_of::<f64>()
+            + self.bounds.len()
+                * (std::mem::size_of::<(usize, usize)>() + std::mem::size_of::<usize>())
+            + self.groups.len() * std::mem::size_of::<Vec<usize>>()
     }
 
     /// Forget the query: the next frame pushed is its first.
     pub fn reset(&mut self) {
         self.rows.fill(f64::INFINITY);
+        self.open.fill(f64::INFINITY);
+        self.open_at = 0;
         self.n = 0;
     }
 
@@ -118,14 +167,28 @@ impl OnlineDtw {
                 "query frames contain NaN or infinity".into(),
             ));
         }
-        for a in frames.chunks_exact(dim) {
+        let k = frames.len() / dim;
+        for (i, a) in frames.chunks_exact(dim).enumerate() {
             let first = self.n == 0;
             for &(s, e) in &self.bounds {
-                let row = &mut self.rows[s..e];
                 let refs = &self.references[s * dim..e * dim];
-                advance(row, refs, a, dim, first);
+                (self.distances)(refs, a, &mut self.local[s..e]);
             }
+            // The open-end costs of the push's last frame, along the recursion.
+            let open = (i + 1 == k).then_some(&mut self.open[..]);
+            recurrences(
+                &mut self.rows,
+                &self.local,
+                &self.bounds,
+                &self.groups,
+                first,
+                self.n + 1,
+                open,
+            );
             self.n += 1;
+        }
+        if k > 0 {
+            self.open_at = self.n;
         }
         Ok(())
     }
@@ -160,6 +223,52 @@ impl OnlineDtw {
         Ok(())
     }
 
+    /// The running class: `(best, confidence, cost)` with `best` the first reference of the
+    /// smallest open-end cost `d₁ = cost` (as [`open_end`](Self::open_end)), and the
+    /// confidence `max(0, 1 − d₁ / d₂)`, `d₂` the smallest open-end cost of a reference whose
+    /// `codes` entry (its label) differs from `best`'s: 1 when every reference has the same
+    /// label, 0 when `d₁` is infinite (before any frame) or `d₂` is not positive. `costs`
+    /// (one per reference) receives every open-end cost.
+    pub fn running(&self, codes: &[i64], costs: &mut [f64]) -> Result<(usize, f64, f64)> {
+        self.check_out(codes.len())?;
+        self.check_out(costs.len())?;
+        let n = self.n;
+        let mut best = (0usize, f64::INFINITY);
+        for (r, (c, &(s, e))) in costs.iter_mut().zip(&self.bounds).enumerate() {
+            let cost = if self.open_at == n {
+                self.open[r]
+            } else {
+                let mut cost = f64::INFINITY;
+                for (j, &d) in self.rows[s..e].iter().enumerate() {
+                    let v = d / (n + j + 1) as f64;
+                    if v < cost {
+                        cost = v;
+                    }
+                }
+                cost
+            };
+            *c = cost;
+            // The first of the smallest (numpy's argmin).
+            if r == 0 || cost < best.1 {
+                best = (r, cost);
+            }
+        }
+        let (best, d1) = best;
+        let label = codes[best];
+        let d2 = codes
+            .iter()
+            .zip(costs.iter())
+            .filter(|(&code, _)| code != label)
+            .map(|(_, &c)| c)
+            .reduce(f64::min);
+        let confidence = match d2 {
+            None => 1.0,
+            Some(d2) if !d1.is_finite() || d2.is_nan() || d2 <= 0.0 => 0.0,
+            Some(d2) => (1.0 - d1 / d2).max(0.0),
+        };
+        Ok((best, confidence, d1))
+    }
+
     fn check_out(&self, len: usize) -> Result<()> {
         if len != self.bounds.len() {
             return Err(Error::Shape(format!(
@@ -171,25 +280,136 @@ impl OnlineDtw {
     }
 }
 
-/// Row `i` of one reference's table from row `i − 1` (in place); `first`: `i = 0`.
-#[inline]
-fn advance(row: &mut [f64], reference: &[f64], a: &[f64], dim: usize, first: bool) {
-    // `diag` is D(i − 1, j − 1); the padded table's corner (−1, −1) is 0, its border infinite.
-    let mut diag = if first { 0.0 } else { f64::INFINITY };
-    let mut left = f64::INFINITY;
-    for (cell, b) in row.iter_mut().zip(reference.chunks_exact(dim)) {
-        let d = a
-            .iter()
-            .zip(b)
-            .map(|(x, y)| (x - y) * (x - y))
-            .sum::<f64>()
-            .sqrt();
+/// The state of one reference's recursion along its row.
+#[derive(Clone, Copy)]
+struct Chain {
+    /// D(i − 1, j − 1).
+    diag: f64,
+    /// D(i, j − 1).
+    left: f64,
+    /// Smallest open-end cost so far along the row.
+    cost: f64,
+}
+
+impl Chain {
+    fn new(first: bool) -> Self {
+        // The padded table's corner (−1, −1) is 0, its border infinite.
+        let diag = if first { 0.0 } else { f64::INFINITY };
+        Self {
+            diag,
+            left: f64::INFINITY,
+            cost: f64::INFINITY,
+        }
+    }
+
+    /// `D(i, j) = d + min(D(i−1, j−1), D(i−1, j), D(i, j−1))` in place of `D(i − 1, j)`
+    /// (the offline kernel's order of the minimum; `x < y` selections equal `f64::min` since
+    /// no value is NaN and none is −0), and the open-end cost `D(i, j) / denom` when `open`.
+    #[inline(always)]
+    fn step(&mut self, cell: &mut f64, d: f64, denom: f64, open: bool) {
         let up = *cell;
-        // Same order of the minimum as the offline kernel: D(i−1, j−1), D(i−1, j), D(i, j−1).
-        let best = diag.min(up).min(left);
-        diag = up;
-        left = d + best;
-        *cell = left;
+        let m = if up < self.diag { up } else { self.diag };
+        let best = if self.left < m { self.left } else { m };
+        self.diag = up;
+        self.left = d + best;
+        *cell = self.left;
+        if open {
+            let v = self.left / denom;
+            if v < self.cost {
+                self.cost = v;
+            }
+        }
+    }
+}
+
+/// Row `n − 1` of every reference's table from row `n − 2` and the local distances, the
+/// references of a group in lockstep up to the shortest's length (module docstring); with
+/// `open`, every reference's open-end cost `min_j D(n − 1, j) / (n + j + 1)` into it.
+fn recurrences(
+    rows: &mut [f64],
+    local: &[f64],
+    bounds: &[(usize, usize)],
+    groups: &[Vec<usize>],
+    first: bool,
+    n: usize,
+    mut open: Option<&mut [f64]>,
+) {
+    let want = open.is_some();
+    for group in groups {
+        let mut chains = [Chain::new(first); LOCKSTEP];
+        let mut done = 0;
+        if let &[r0, r1, r2, r3] = &group[..] {
+            let s = [bounds[r0].0, bounds[r1].0, bounds[r2].0, bounds[r3].0];
+            // Grouped shortest first: r0 is the shortest.
+            let short = bounds[r0].1 - bounds[r0].0;
+            for j in 0..short {
+                let denom = (n + j + 1) as f64;
+                for (chain, &start) in chains.iter_mut().zip(&s) {
+                    let at = start + j;
+                    chain.step(&mut rows[at], local[at], denom, want);
+                }
+            }
+            done = short;
+        }
+        for (chain, &r) in chains.iter_mut().zip(group) {
+            let (s, e) = bounds[r];
+            for j in done..e - s {
+                let denom = (n + j + 1) as f64;
+                chain.step(&mut rows[s + j], local[s + j], denom, want);
+            }
+            if let Some(open) = open.as_deref_mut() {
+                open[r] = chain.cost;
+            }
+        }
+    }
+}
+
+macro_rules! distance_kernel {
+    ($name:ident, $($feature:literal)?) => {
+        /// The local distances `local` (`m` values) of the query frame `a` to a reference's
+        /// `m` frames (channel-major `reference`), across `j`, each summed over the channels
+        /// in order, then the square root.
+        $(#[target_feature(enable = $feature)])?
+        fn $name(reference: &[f64], a: &[f64], local: &mut [f64]) {
+            let m = local.len();
+            let mut columns = reference.chunks_exact(m).zip(a);
+            if let Some((column, &x)) = columns.next() {
+                // 0 + t² = t² exactly (t² ≥ +0): the offline sum's first term.
+                for (d, &y) in local.iter_mut().zip(column) {
+                    let t = x - y;
+                    *d = t * t;
+                }
+            }
+            for (column, &x) in columns {
+                for (d, &y) in local.iter_mut().zip(column) {
+                    let t = x - y;
+                    *d += t * t;
+                }
+            }
+            for d in local.iter_mut() {
+                *d = d.sqrt();
+            }
+        }
+    };
+}
+
+distance_kernel!(distances_portable,);
+#[cfg(target_arch = "x86_64")]
+distance_kernel!(distances_avx2, "avx2,fma");
+#[cfg(target_arch = "x86_64")]
+distance_kernel!(distances_avx512, "avx512f,avx512vl,avx2,fma");
+
+/// The distance kernel at `level` (one this CPU runs). `x * y + z` is never contracted to a
+/// fused multiply-add by Rust, so every level gives the same bits.
+fn pick(level: Level) -> Distances {
+    assert!(crate::simd::cpu_runs(level), "{level:?} not available");
+    match level {
+        // SAFETY (both): the CPU has the features the functions were compiled for.
+        #[cfg(target_arch = "x86_64")]
+        Level::Avx512 => |b, a, l| unsafe { distances_avx512(b, a, l) },
+        #[cfg(target_arch = "x86_64")]
+        Level::Avx2Fma => |b, a, l| unsafe { distances_avx2(b, a, l) },
+        _ => distances_portable,
     }
 }
 
@@ -315,6 +535,102 @@ mod tests {
         online.closed_end_costs(&mut x).unwrap();
         fresh.closed_end_costs(&mut y).unwrap();
         assert_eq!(x, y);
+    }
+
+    #[test]
+    fn every_simd_level_gives_the_offline_kernel_bits() {
+        let mut seed = 19;
+        for dim in [1usize, 2, 5, 12, 13] {
+            let lengths = [1usize, 3, 7, 64, 33, 2, 50, 5, 17, 1, 90];
+            let refs: Vec<f64> = lengths
+                .iter()
+                .flat_map(|&m| random(m, dim, &mut seed))
+                .collect();
+            let mut offsets = vec![0i64];
+            for &m in &lengths[..lengths.len() - 1] {
+                offsets.push(offsets.last().unwrap() + m as i64);
+            }
+            let query = random(21, dim, &mut seed);
+            let offline =
+                dtw_cross(&query, &[0], &refs, &offsets, dim, &DtwOptions::default()).unwrap();
+            for level in crate::simd::levels() {
+                let mut online = OnlineDtw::new(&refs, &offsets, dim).unwrap();
+                online.distances = pick(level);
+                online.push(&query).unwrap();
+                let mut out = vec![0.0; lengths.len()];
+                online.closed_end_costs(&mut out).unwrap();
+                assert_eq!(out, offline, "dim {dim}, {level:?}");
+            }
+        }
+    }
+
+    /// The running class from the open-end costs, written out separately.
+    fn running_by_costs(costs: &[f64], codes: &[i64]) -> (usize, f64, f64) {
+        let mut best = 0;
+        for (r, &c) in costs.iter().enumerate() {
+            if c < costs[best] {
+                best = r;
+            }
+        }
+        let d1 = costs[best];
+        let others: Vec<f64> = (0..costs.len())
+            .filter(|&r| codes[r] != codes[best])
+            .map(|r| costs[r])
+            .collect();
+        if others.is_empty() {
+            return (best, 1.0, d1);
+        }
+        let d2 = others.iter().cloned().fold(f64::INFINITY, f64::min);
+        if !d1.is_finite() || d2 <= 0.0 {
+            return (best, 0.0, d1);
+        }
+        (best, f64::max(0.0, 1.0 - d1 / d2), d1)
+    }
+
+    #[test]
+    fn running_is_the_best_open_end_match_and_its_margin() {
+        let mut seed = 23;
+        let dim = 3;
+        let lengths = [6usize, 9, 4, 11, 8];
+        let refs: Vec<f64> = lengths
+            .iter()
+            .flat_map(|&m| random(m, dim, &mut seed))
+            .collect();
+        let mut offsets = vec![0i64];
+        for &m in &lengths[..lengths.len() - 1] {
+            offsets.push(offsets.last().unwrap() + m as i64);
+        }
+        let mut online = OnlineDtw::new(&refs, &offsets, dim).unwrap();
+        let mut costs = vec![0.0; 5];
+        // Before any frame: every cost infinite, the first reference, confidence 0.
+        let got = online.running(&[0, 1, 0, 2, 1], &mut costs).unwrap();
+        assert_eq!(got, (0, 0.0, f64::INFINITY));
+        for i in 0..12 {
+            online.push(&random(1, dim, &mut seed)).unwrap();
+            let (mut want, mut at) = (vec![0.0; 5], vec![0usize; 5]);
+            online.open_end(&mut want, &mut at).unwrap();
+            for codes in [[0i64, 1, 0, 2, 1], [4, 4, 4, 4, 4], [0, 1, 2, 3, 4]] {
+                let got = online.running(&codes, &mut costs).unwrap();
+                assert_eq!(costs, want, "frame {i}");
+                assert_eq!(got, running_by_costs(&want, &codes), "frame {i} {codes:?}");
+            }
+        }
+        // A chunk of frames: the costs of its last frame.
+        online.push(&random(3, dim, &mut seed)).unwrap();
+        let (mut want, mut at) = (vec![0.0; 5], vec![0usize; 5]);
+        online.open_end(&mut want, &mut at).unwrap();
+        let got = online.running(&[0, 1, 0, 2, 1], &mut costs).unwrap();
+        assert_eq!(costs, want);
+        assert_eq!(got, running_by_costs(&want, &[0, 1, 0, 2, 1]));
+        // One label: confidence 1.
+        assert_eq!(online.running(&[7; 5], &mut costs).unwrap().1, 1.0);
+        // After a reset: as before any frame.
+        online.reset();
+        assert_eq!(
+            online.running(&[0, 1, 0, 2, 1], &mut costs).unwrap(),
+            (0, 0.0, f64::INFINITY)
+        );
+        assert!(online.running(&[0; 4], &mut costs).is_err());
     }
 
     #[test]

@@ -65,8 +65,10 @@ class OnlineRecogniser:
         self.labels = np.asarray(list(labels))
         if self.labels.shape[0] != len(refs):
             raise ValueError(f"{len(refs)} references but {self.labels.shape[0]} labels")
-        # Integer codes of the labels: confidence compares them at every push.
-        self._codes = np.unique(self.labels, return_inverse=True)[1].reshape(-1)
+        # Integer codes of the labels: the running class compares them at every push.
+        self._codes = np.ascontiguousarray(
+            np.unique(self.labels, return_inverse=True)[1].reshape(-1), dtype=np.int64
+        )
         self.describe = describe
 
     @classmethod
@@ -99,10 +101,10 @@ class OnlineRecogniser:
             self.dtw.push(features)
 
     def running(self) -> tuple[Any, float, float]:
-        """``(label, confidence, cost)`` of the open-end match so far."""
-        costs, _ = self.dtw.open_end()
-        best, conf = confidence(np.asarray(costs), self._codes)
-        return self.labels[best], conf, float(costs[best])
+        """``(label, confidence, cost)`` of the open-end match so far: :func:`confidence` of
+        the open-end costs, in one Rust call (:meth:`visprim.kernels.OnlineDtw.running`)."""
+        best, conf, cost = self.dtw.running(self._codes)
+        return self.labels[best], conf, cost
 
     def final(self) -> tuple[Any, float, float]:
         """``(label, confidence, cost)`` of the closed-end match of the whole query."""

@@ -175,6 +175,24 @@ def frames_of(
     return Frames(t, m, j, f)
 
 
+def _checked(name: str, value: Any) -> Any:
+    """``value`` of the setting ``name`` checked against its declaration
+    (:data:`visprim.params.ONLINE_OPTIONS`): one of its ``choices``, or a positive finite
+    number for a setting in seconds."""
+    option = ONLINE_OPTIONS[name]
+    if option.choices is not None and value not in option.choices:
+        allowed = " or ".join(repr(c) for c in option.choices)
+        raise ValueError(f"{name} must be {allowed}, got {value!r}")
+    if option.unit == "s":
+        try:
+            ok = math.isfinite(value) and value > 0
+        except TypeError:
+            ok = False
+        if not ok:
+            raise ValueError(f"{name} must be a positive number of seconds, got {value!r}")
+    return value
+
+
 class OnlineSegmenter:
     """SEG-2 segments and their primitives, from frames pushed in chunks (module docstring).
 
@@ -219,10 +237,7 @@ class OnlineSegmenter:
         c = getattr(model, "seg2_threshold_", None)
         if c is None or not (c > 0):
             raise ValueError("the model has no fitted SEG-2 constant (seg2_threshold_)")
-        if segment_filter not in ("zero_phase", "causal"):
-            raise ValueError(
-                f"segment_filter must be 'zero_phase' or 'causal', got {segment_filter!r}"
-            )
+        segment_filter = _checked("segment_filter", segment_filter)
         self.segment_filter = segment_filter
         if confirm_frames is not None and not (
             isinstance(confirm_frames, int | np.integer) and confirm_frames >= 1
@@ -231,15 +246,10 @@ class OnlineSegmenter:
                 f"confirm_frames must be a number of frames ≥ 1 or None, got {confirm_frames!r}"
             )
         self.confirm_frames = None if confirm_frames is None else int(confirm_frames)
-        if threshold not in ("fixed", "adaptive"):
-            raise ValueError(f"threshold must be 'fixed' or 'adaptive', got {threshold!r}")
-        for name, v in (("rest_timeout", rest_timeout), ("max_segment", max_segment)):
-            if not (math.isfinite(v) and v > 0):
-                raise ValueError(f"{name} must be a positive number of seconds, got {v!r}")
-        if not (math.isfinite(speed_window) and speed_window > 0):
-            raise ValueError(
-                f"speed_window must be a positive number of seconds, got {speed_window!r}"
-            )
+        threshold = _checked("threshold", threshold)
+        rest_timeout = _checked("rest_timeout", rest_timeout)
+        max_segment = _checked("max_segment", max_segment)
+        speed_window = _checked("speed_window", speed_window)
         self.model = model
         self.arms = tuple(getattr(model, "arms_", ("right",)))
         self.features = str(model.features)
@@ -281,6 +291,15 @@ class OnlineSegmenter:
         self.bone_directions: NDArray[np.float64] = np.zeros((0, 6 * len(self.arms)))
         self._vector_periodic = periodic_channels(self.features, len(self.arms))
         self._n_channels = int(model.n_channels)
+        # The fitted projection and centres, taken once: a closed segment is projected and
+        # assigned here directly (model.transform's input checks cost more than the product).
+        basis = model.basis_
+        #: ``E_f`` (d, f) and ``s̄ E_f`` (f,): ``p = s E_f − s̄ E_f`` (:meth:`PCABasis.project`).
+        self._components = np.ascontiguousarray(basis.components(int(model.n_components)))
+        self._mean_projection = basis.mean @ self._components
+        self._centres = np.ascontiguousarray(model.cluster_centers_, dtype=np.float64)
+        #: Each primitive's rebuilt vector (offsets="mean"'s amplitude), computed once.
+        self._rebuilt: dict[int, NDArray[np.float64]] = {}
         self._ring: FrameRing | None = None
         self._raw: FrameRing | None = None
         self._times: FrameRing | None = None
@@ -628,13 +647,20 @@ class OnlineSegmenter:
         return t0 - (first - f) * (t1 - t0)
 
     def _segment_values(self, a: int, b: int, upto: int) -> NDArray[np.float64]:
-        """Values of frames ``[a, b]``: causal, or the raw angles of ``[a − _LEAD, upto)``
-        through the model's zero-phase filter (module docstring)."""
+        """Values of the segment between the filtered frames ``a`` and ``b``: the causal
+        values of ``[a, b]``, or the raw angles of ``[a' − _LEAD, upto)`` through the model's
+        zero-phase filter, kept on ``[a', b']``, the raw frames where the segment's reported
+        times are (``a − shift``, ``b − shift``: :meth:`_movement_time`; the causal values
+        lag the raw frames by the filter's delay, the zero-phase ones do not) (module
+        docstring)."""
         assert self._ring is not None
         if self._raw is None:
             return self._ring.window(a, b + 1)
+        ra = max(self._raw.start, a - self._shift)
+        rb = b if self._final and b == self.n_frames - 1 else b - self._shift
+        rb = max(rb, ra + 1)
         upto = min(upto, self._raw.end)
-        lo = max(self._raw.start, a - _LEAD)
+        lo = max(self._raw.start, ra - _LEAD)
         raw = self._raw.window(lo, upto)
         smooth = lowpass(
             raw,
@@ -642,7 +668,15 @@ class OnlineSegmenter:
             cutoff=float(self.model.cutoff),
             short="reduce",
         )
-        return from_angles(smooth[a - lo : b + 1 - lo], self.features)
+        return from_angles(smooth[ra - lo : rb + 1 - lo], self.features)
+
+    def _project(self, vectors: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Projections ``(N, f)`` of segment vectors ``(N, d)`` (radians): ``s E_f − s̄ E_f``,
+        :meth:`~visprim.model.PrimitiveModel.transform`'s formula without its input checks
+        (the vectors are the resampler's, float64 and C-ordered) or its one-thread BLAS
+        context (a vector-matrix product has no thread-dependent summation; equal to
+        ``transform`` in ``tests/test_online_close.py``)."""
+        return np.asarray(vectors @ self._components - self._mean_projection)
 
     def _close(self, a: int, b: int, emitted: float, *, forced: bool, upto: int) -> SegmentClosed:
         assert self._ring is not None
@@ -652,7 +686,7 @@ class OnlineSegmenter:
         sv = vectors_from_frames(
             values,
             [0.0],
-            [float(b - a)],
+            [float(values.shape[0] - 1)],
             trial=[0],
             starts=[start],
             ends=[end],
@@ -660,12 +694,14 @@ class OnlineSegmenter:
             periodic_channels=self._vector_periodic,
             offsets=str(self.model.offsets),
         )
-        p = self.model.transform(sv.vectors)
-        labels, dist = self.model.assign(p)
+        labels, dist = kernels.kmeans_predict(self._project(sv.vectors), self._centres)
         amplitude = 1.0
         if str(self.model.offsets) == "mean":
             k = int(labels[0])
-            rebuilt = self.model.cluster_centers_[k] @ self.model.components_.T + self.model.mean_
+            rebuilt = self._rebuilt.get(k)
+            if rebuilt is None:
+                rebuilt = self.model.cluster_centers_[k] @ self.model.components_.T
+                rebuilt = self._rebuilt[k] = rebuilt + self.model.mean_
             amplitude = float(amplitude_gains(sv.vectors, rebuilt[None, :])[0])
         index = self._n_seg
         self._n_seg += 1

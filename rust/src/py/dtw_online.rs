@@ -98,6 +98,25 @@ impl OnlineDtw {
         Ok((costs.into_pyarray(py), at.into_pyarray(py)))
     }
 
+    /// ``(best, confidence, cost)``: the reference of the smallest open-end cost, ``1 − d₁ /
+    /// d₂`` against the best reference of another label (``codes`` ``(n_references,)`` int64,
+    /// one label code per reference; 1 if every label is the same, 0 before any frame) and
+    /// that cost ``d₁``.
+    fn running(&self, py: Python<'_>, codes: &Bound<'_, PyAny>) -> PyResult<(usize, f64, f64)> {
+        let arr = ndarray(codes, "codes", "int64")?;
+        check_dtype::<i64>(arr, "codes", "int64")?;
+        if arr.ndim() != 1 {
+            return Err(PyValueError::new_err(format!(
+                "codes must be 1-D (one label code per reference), got shape {}",
+                shape_str(arr.shape())
+            )));
+        }
+        let codes = i64_values(arr, "codes")?;
+        let inner = &self.inner;
+        let mut costs = crate::buffer::try_filled(inner.n_references(), 0.0, "the open-end costs")?;
+        Ok(py.detach(|| inner.running(&codes, &mut costs))?)
+    }
+
     /// Forget the query.
     fn reset(&mut self) {
         self.inner.reset();
