@@ -131,9 +131,8 @@ def _gif(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
 MP4_PRESET = "veryfast"
 
 #: x264 encodes in one thread. Its own choice (about 1.5 threads a core, and lookahead
-#: threads) takes the cores from the thread drawing the frames, the slower of the two: on
-#: two cores a 5-minute imitation took 80 s so, 62 s with one encoder thread
-#: (``benches/bench_imitate_long.py --video imitation.mp4``, docs/imitation.rst).
+#: threads) takes the cores from the thread drawing the frames, the critical path of a
+#: long imitation on a small machine (docs/imitation.rst).
 MP4_THREADS = ["-threads", "1"]
 
 #: How the YUV frames handed to x264 are tagged: BT.601 coefficients (``smpte170m``), studio
@@ -157,9 +156,8 @@ def _yuv_frames(
     frames: Iterable[Image.Image],
 ) -> Iterator[tuple[tuple[int, int], np.ndarray]]:
     """Each frame's size (pixels) and :func:`yuv420` planes. The conversion runs here, in
-    the thread that feeds the encoder, beside the thread drawing the next frame (on two
-    cores that is faster than converting where the frames are drawn: 66 s against 76 s
-    for a 5-minute imitation)."""
+    the thread that feeds the encoder, beside the thread drawing the next frame (which is
+    the critical path)."""
     for im in frames:
         rgb = im if im.mode == "RGB" else im.convert("RGB")
         yield rgb.size, yuv420(rgb)
