@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 from visprim.arm import ArmLengths, forward_kinematics
+from visprim.io.calibration import Camera
 
 #: Body-frame positions (m): shoulders 0.36 m apart, hips 0.20 m apart and 0.5 m lower.
 RIGHT_SHOULDER = np.array([0.0, -0.18, 1.45])
@@ -94,3 +95,28 @@ def to_blazepose(kp: dict[str, NDArray[np.float64]]) -> NDArray[np.float64]:
 #: down, z away from the camera) for a subject facing the camera: forward → −z, the
 #: subject's left → +x (the image's right), up → −y. A proper rotation.
 BODY_TO_CAMERA = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, -1.0], [-1.0, 0.0, 0.0]])
+
+
+#: Centres (m) of four cameras around the origin, for the triangulation tests.
+CAMERA_CENTRES = ([3.0, 0.5, 1.6], [-0.5, 3.2, 1.8], [-3.0, -1.0, 2.1], [0.8, -3.1, 1.9])
+
+
+def look_at(centre: NDArray[np.float64]) -> NDArray[np.float64]:
+    """World → OpenCV camera rotation for a camera at ``centre`` looking at (0, 0, 1)."""
+    f = np.array([0.0, 0.0, 1.0]) - centre
+    f /= np.linalg.norm(f)
+    x = np.cross(f, [0.0, 0.0, 1.0])
+    x /= np.linalg.norm(x)
+    return np.stack([x, np.cross(f, x), f])
+
+
+def ring_cameras(
+    k: NDArray[np.float64], dist: NDArray[np.float64], size: tuple[int, int] = (1088, 1920)
+) -> list[Camera]:
+    """Cameras ``cam01`` … ``cam04`` at :data:`CAMERA_CENTRES`, each looking at (0, 0, 1),
+    with intrinsics ``k``, distortion ``dist`` and image ``size`` (width, height px)."""
+    out = []
+    for i, c in enumerate(CAMERA_CENTRES):
+        r = look_at(np.array(c))
+        out.append(Camera(f"cam{i + 1:02d}", size, k, dist, r, -r @ np.array(c)))
+    return out

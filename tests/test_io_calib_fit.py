@@ -8,29 +8,16 @@ import importlib.util
 
 import numpy as np
 import pytest
+from _keypoint_data import ring_cameras
 from visprim.io.calibration import Camera
 from visprim.io.video_pose import VideoPoses
 from visprim.io.views import triangulate_poses
-
-CENTRES = ([3.0, 0.5, 1.6], [-0.5, 3.2, 1.8], [-3.0, -1.0, 2.1], [0.8, -3.1, 1.9])
-
-
-def _look_at(centre: np.ndarray) -> np.ndarray:
-    f = np.array([0.0, 0.0, 1.0]) - centre
-    f /= np.linalg.norm(f)
-    x = np.cross(f, [0.0, 0.0, 1.0])
-    x /= np.linalg.norm(x)
-    return np.stack([x, np.cross(f, x), f])
 
 
 def _cameras() -> list[Camera]:
     k = np.array([[1681.0, 0.0, 533.0], [0.0, 1681.0, 948.0], [0.0, 0.0, 1.0]])
     dist = np.array([-0.04, 0.13, 0.0006, 0.0007, 0.0])
-    out = []
-    for i, c in enumerate(CENTRES):
-        r = _look_at(np.array(c))
-        out.append(Camera(f"cam{i + 1:02d}", (1088, 1920), k, dist, r, -r @ np.array(c)))
-    return out
+    return ring_cameras(k, dist)
 
 
 def _letterbox(pix: np.ndarray) -> np.ndarray:

@@ -7,32 +7,19 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _keypoint_data import CAMERA_CENTRES, look_at, ring_cameras
 from scipy.spatial.transform import Rotation
 from visprim.io.calibration import Camera, read_calibration, read_qca, read_toml, rodrigues
 from visprim.io.errors import MalformedFileError
 from visprim.io.views import SIDE_PAIRS, _swap_combos, triangulate_keypoints
 
 RX_PI = np.diag([1.0, -1.0, -1.0])
-CENTRES = ([3.0, 0.5, 1.6], [-0.5, 3.2, 1.8], [-3.0, -1.0, 2.1], [0.8, -3.1, 1.9])
-
-
-def _look_at(centre: np.ndarray) -> np.ndarray:
-    """World → OpenCV camera rotation for a camera at ``centre`` looking at (0, 0, 1)."""
-    f = np.array([0.0, 0.0, 1.0]) - centre
-    f /= np.linalg.norm(f)
-    x = np.cross(f, [0.0, 0.0, 1.0])
-    x /= np.linalg.norm(x)
-    return np.stack([x, np.cross(f, x), f])
 
 
 def _cameras() -> list[Camera]:
     k = np.array([[1700.0, 0.0, 540.0], [0.0, 1700.0, 960.0], [0.0, 0.0, 1.0]])
     dist = np.array([-0.01, 0.02, 0.0005, -0.0003, 0.0])
-    cams = []
-    for i, c in enumerate(CENTRES):
-        r = _look_at(np.array(c))
-        cams.append(Camera(f"cam{i + 1:02d}", (1088, 1920), k, dist, r, -r @ np.array(c)))
-    return cams
+    return ring_cameras(k, dist)
 
 
 def _scene(t: int = 12, seed: int = 0) -> tuple[list[Camera], np.ndarray, np.ndarray]:
@@ -128,8 +115,8 @@ QCA_CAMERA = """<camera active="1" avg-residual="0.4" serial="{name}">
 
 def _qca(tmp_path: Path) -> Path:
     blocks = []
-    for i, c in enumerate(CENTRES):
-        m = RX_PI @ _look_at(np.array(c))
+    for i, c in enumerate(CAMERA_CENTRES):
+        m = RX_PI @ look_at(np.array(c))
         blocks.append(
             QCA_CAMERA.format(name=f"cam{i + 1:02d}", m=m.tolist(), c=(np.array(c) * 1000).tolist())
         )

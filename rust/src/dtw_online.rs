@@ -429,6 +429,16 @@ mod tests {
         (0..frames * dim).map(|_| lcg(seed)).collect()
     }
 
+    /// Random references of `lengths` frames one after the other, and their offsets.
+    fn references(lengths: &[usize], dim: usize, seed: &mut u64) -> (Vec<f64>, Vec<i64>) {
+        let refs = lengths.iter().flat_map(|&m| random(m, dim, seed)).collect();
+        let mut offsets = vec![0i64];
+        for &m in &lengths[..lengths.len() - 1] {
+            offsets.push(offsets.last().unwrap() + m as i64);
+        }
+        (refs, offsets)
+    }
+
     /// Open-end cost from a full table, for comparison.
     #[allow(clippy::needless_range_loop)]
     fn open_end_by_table(a: &[f64], b: &[f64], dim: usize) -> (f64, usize) {
@@ -459,14 +469,7 @@ mod tests {
         let mut seed = 7;
         let dim = 3;
         let lengths = [5usize, 1, 12, 30];
-        let refs: Vec<f64> = lengths
-            .iter()
-            .flat_map(|&m| random(m, dim, &mut seed))
-            .collect();
-        let mut offsets = vec![0i64];
-        for &m in &lengths[..lengths.len() - 1] {
-            offsets.push(offsets.last().unwrap() + m as i64);
-        }
+        let (refs, offsets) = references(&lengths, dim, &mut seed);
         let query = random(23, dim, &mut seed);
         let offline =
             dtw_cross(&query, &[0], &refs, &offsets, dim, &DtwOptions::default()).unwrap();
@@ -542,14 +545,7 @@ mod tests {
         let mut seed = 19;
         for dim in [1usize, 2, 5, 12, 13] {
             let lengths = [1usize, 3, 7, 64, 33, 2, 50, 5, 17, 1, 90];
-            let refs: Vec<f64> = lengths
-                .iter()
-                .flat_map(|&m| random(m, dim, &mut seed))
-                .collect();
-            let mut offsets = vec![0i64];
-            for &m in &lengths[..lengths.len() - 1] {
-                offsets.push(offsets.last().unwrap() + m as i64);
-            }
+            let (refs, offsets) = references(&lengths, dim, &mut seed);
             let query = random(21, dim, &mut seed);
             let offline =
                 dtw_cross(&query, &[0], &refs, &offsets, dim, &DtwOptions::default()).unwrap();
@@ -592,14 +588,7 @@ mod tests {
         let mut seed = 23;
         let dim = 3;
         let lengths = [6usize, 9, 4, 11, 8];
-        let refs: Vec<f64> = lengths
-            .iter()
-            .flat_map(|&m| random(m, dim, &mut seed))
-            .collect();
-        let mut offsets = vec![0i64];
-        for &m in &lengths[..lengths.len() - 1] {
-            offsets.push(offsets.last().unwrap() + m as i64);
-        }
+        let (refs, offsets) = references(&lengths, dim, &mut seed);
         let mut online = OnlineDtw::new(&refs, &offsets, dim).unwrap();
         let mut costs = vec![0.0; 5];
         // Before any frame: every cost infinite, the first reference, confidence 0.
