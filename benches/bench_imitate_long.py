@@ -11,8 +11,11 @@ child process, ``--repeats`` runs per length (median [min, max]). Figures per ru
   wall time what the load made of it;
 * peak resident memory of the child, ``ru_maxrss`` from ``wait4`` (the Python process;
   for ``.mp4`` the encoder is a second process, counted in the next figure);
-* peak resident memory of the child's whole process tree (the sum of every process's RSS,
-  sampled from ``/proc`` every 50 ms);
+* peak memory of the child's whole process tree, sampled from ``/proc/PID/smaps_rollup``
+  every 0.1 s: the sum of every process's RSS, and of its PSS. The video is drawn by forks
+  of the child (:mod:`visprim.sim.frame_workers`), which share most of their pages with it:
+  the RSS sum counts a shared page once in each process, the PSS sum once in all (the
+  memory the machine spends);
 * the targets: 5 min ≤ 60 s and ≤ 1 GB, 30 min ≤ 1.5 GB.
 
 The output is stamped: date, commit, CPU, ``instruction_set()``, and the load average at the
@@ -55,10 +58,9 @@ def looped(trial: Trial, minutes: float) -> Trial:
     return Trial(times=np.arange(n) * period, markers=markers, name=f"looped_{minutes:g}min")
 
 
-def _tree_rss(pid: int) -> int:
-    """Sum of the resident memory (bytes) of ``pid`` and its descendants."""
+def _tree(pid: int) -> list[int]:
+    """``pid`` and its descendants."""
     children: dict[int, list[int]] = {}
-    rss: dict[int, int] = {}
     for entry in os.listdir("/proc"):
         if not entry.isdigit():
             continue
@@ -67,29 +69,46 @@ def _tree_rss(pid: int) -> int:
                 fields = fh.read().rsplit(")", 1)[1].split()
         except OSError:
             continue
-        p = int(entry)
-        children.setdefault(int(fields[1]), []).append(p)
-        rss[p] = int(fields[21]) * PAGE
-    total, todo = 0, [pid]
+        children.setdefault(int(fields[1]), []).append(int(entry))
+    out, todo = [], [pid]
     while todo:
         p = todo.pop()
-        total += rss.get(p, 0)
+        out.append(p)
         todo += children.get(p, [])
-    return total
+    return out
 
 
-def run_once(argv: list[str]) -> tuple[float, float, float, float]:
-    """(wall seconds, CPU seconds, child ru_maxrss MB, process tree peak MB) of one child
-    run."""
+def _memory(pid: int) -> tuple[int, int]:
+    """(resident, proportional) memory of a process, bytes: RSS counts every page it maps,
+    those it shares too; PSS divides each shared page among the processes sharing it."""
+    rss = pss = 0
+    try:
+        with open(f"/proc/{pid}/smaps_rollup", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Rss:"):
+                    rss = int(line.split()[1]) * 1024
+                elif line.startswith("Pss:"):
+                    pss = int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return rss, pss
+
+
+def run_once(argv: list[str]) -> tuple[float, float, float, float, float]:
+    """(wall seconds, CPU seconds, child ru_maxrss MB, process tree peak RSS and PSS MB) of
+    one child run. The tree's figures are the peaks of sums sampled every 0.1 s: the RSS sum
+    counts a page shared by forked processes once in each, the PSS sum once in all."""
     t0 = time.perf_counter()
     proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    peak = [0]
+    peak = [0, 0]
     done = threading.Event()
 
     def sample() -> None:
         while not done.is_set():
-            peak[0] = max(peak[0], _tree_rss(proc.pid))
-            done.wait(0.05)
+            mem = [_memory(p) for p in _tree(proc.pid)]
+            peak[0] = max(peak[0], sum(m[0] for m in mem))
+            peak[1] = max(peak[1], sum(m[1] for m in mem))
+            done.wait(0.1)
 
     sampler = threading.Thread(target=sample, daemon=True)
     sampler.start()
@@ -101,7 +120,7 @@ def run_once(argv: list[str]) -> tuple[float, float, float, float]:
     if os.waitstatus_to_exitcode(status) != 0:
         raise SystemExit(f"failed: {' '.join(argv)}\n{err}")
     cpu = usage.ru_utime + usage.ru_stime
-    return wall, cpu, usage.ru_maxrss / 1024.0, peak[0] / 2**20
+    return wall, cpu, usage.ru_maxrss / 1024.0, peak[0] / 2**20, peak[1] / 2**20
 
 
 def _spread(values: list[float], fmt: str) -> str:
@@ -132,30 +151,32 @@ def main() -> None:
     trials = imitation_experiment(2, 6, seed=3)
     model = PrimitiveModel(n_clusters=8, n_init=2, seed=0).fit(trials[:-1])
     print(
-        "| recording | frames | wall s | CPU s | peak RSS MB, Python | peak RSS MB, process tree |"
+        "| recording | frames | wall s | CPU s | peak RSS MB, Python | peak RSS MB, process tree "
+        "| peak PSS MB, process tree |"
     )
-    print("|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory(prefix="visprim-bench-long-") as tmp:
         root = Path(tmp)
         model.save(root / "model.npz")
         for minutes in args.minutes:
             rec = looped(trials[-1], minutes)
             path = write_marker_csv(root / f"{rec.name}.csv", rec, truth=False)
-            walls, cpus, rss, tree = [], [], [], []
+            walls, cpus, rss, tree, tree_pss = [], [], [], [], []
             for k in range(args.repeats):
                 out = root / f"out_{minutes:g}_{k}"
                 argv = [sys.executable, "-m", "visprim.cli", "-q", "imitate"]
                 argv += [str(root / "model.npz"), str(path), "--out", str(out)]
                 argv += ["--size", str(args.size), "--video", args.video]
-                wall, cpu, mb, tree_mb = run_once(argv)
+                wall, cpu, mb, tree_mb, pss_mb = run_once(argv)
                 walls.append(wall)
                 cpus.append(cpu)
                 rss.append(mb)
                 tree.append(tree_mb)
+                tree_pss.append(pss_mb)
             print(
                 f"| {minutes:g} min | {rec.n_frames} | {_spread(walls, '.0f')} | "
                 f"{_spread(cpus, '.0f')} | "
-                f"{_spread(rss, '.0f')} | {_spread(tree, '.0f')} |",
+                f"{_spread(rss, '.0f')} | {_spread(tree, '.0f')} | {_spread(tree_pss, '.0f')} |",
                 flush=True,
             )
     load1 = os.getloadavg()

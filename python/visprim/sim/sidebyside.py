@@ -33,7 +33,7 @@ from visprim.sim.render import (
     _place,
     _union,
 )
-from visprim.sim.video import write_video
+from visprim.sim.video import write_video, write_video_parts
 
 #: Where the human's shoulders are drawn: Adonis's right (then left) shoulder at rest
 #: (world, metres).
@@ -232,15 +232,21 @@ def render_imitation(
     *,
     size: tuple[int, int] = (480, 480),
     camera: Camera | None = None,
+    workers: int | None = None,
 ) -> Path:
     """Write the side-by-side video of an imitation (.gif or .mp4, from the extension),
     atomically, one frame at a time. A recording read from a video shows its own frames with
     the detected arm, on the video's clock (:mod:`visprim.sim.sidebyside_video`); any other
-    shows the recorded arm as a stick figure at the playback's frame rate. Returns the
-    path."""
+    shows the recorded arm as a stick figure at the playback's frame rate, its frames drawn
+    by ``workers`` processes (:func:`visprim.sim.frame_workers.draw_workers`; None: one per
+    usable core, where that helps). Returns the path."""
+    from visprim.sim.frame_workers import draw_workers
     from visprim.sim.sidebyside_video import is_video_trial, render_video_imitation
 
     if is_video_trial(imitation.trial):
         return render_video_imitation(imitation, path, size=size, camera=camera)
     view = SideBySide(imitation, size, camera)
-    return write_video(path, view.frames(), view.fps)
+    n = draw_workers(view.n_frames, workers)
+    if n < 2:
+        return write_video(path, view.frames(), view.fps)
+    return write_video_parts(path, view.frame, view.n_frames, view.fps, n)

@@ -25,11 +25,14 @@ half-written video.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import queue
+import shutil
 import struct
+import subprocess
 import threading
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -92,6 +95,49 @@ def palette_lut(palette: Image.Image) -> bytes:
     return probe.quantize(palette=palette, dither=Image.Dither.NONE).tobytes()
 
 
+class _GifPalette:
+    """The palette every frame of a GIF is reduced to: 255 colours by median cut of its
+    first frame (``table``: the colours, 3 bytes each; ``lut``: :func:`palette_lut`)."""
+
+    def __init__(self, first: Image.Image) -> None:
+        palette = first.quantize(
+            colors=255, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE
+        )
+        self.size = first.size
+        self.table = bytes(palette.getpalette() or [])[: 3 * 255]
+        self.lut = palette_lut(palette)
+
+    def header(self) -> bytes:
+        """Header, logical screen with a 256-colour global table (the palette, then unused
+        entries; the last index is the transparent one), loop forever (NETSCAPE2.0)."""
+        w, h = self.size
+        return (
+            b"GIF89a"
+            + struct.pack("<HHBBB", w, h, 0xF7, 0, 0)
+            + self.table.ljust(768, b"\x00")
+            + b"!\xff\x0bNETSCAPE2.0\x03\x01\x00\x00\x00"
+        )
+
+
+def _gif_frames(fh: Any, palette: _GifPalette, frames: Iterable[Image.Image], fps: float) -> int:
+    """Write the blocks of ``frames`` to ``fh``: the first whole, each after it the
+    rectangle that changed. Returns the number of frames."""
+    centis = max(1, int(round(1000.0 / fps / 10.0)))
+    encoder = _visprim.GifFrames(*palette.size, palette.lut)
+    n = 0
+    for im in frames:
+        if im.size != palette.size:
+            raise ValueError(f"write_video: frame {n} is {im.size}, the first {palette.size}")
+        rgb = im if im.mode == "RGB" else im.convert("RGB")
+        try:  # the image's own memory (Arrow C data interface), no copy
+            blocks, _ = encoder.frame_arrow(*rgb.__arrow_c_array__(), centis)
+        except (AttributeError, ValueError):  # an older Pillow, or not one block
+            blocks, _ = encoder.frame(rgb.tobytes("raw", "RGBX"), centis)
+        fh.write(blocks)
+        n += 1
+    return n
+
+
 def _gif(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
     """Write the GIF one frame at a time (memory: a few frames), every frame reduced to the
     first frame's palette; after the first, each frame is the rectangle that changed."""
@@ -99,28 +145,10 @@ def _gif(tmp: Path, frames: Iterable[Image.Image], fps: float) -> int:
     first = next(it, None)
     if first is None:
         raise ValueError("write_video: no frames to write")
-    palette = first.quantize(colors=255, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
-    table = bytes(palette.getpalette() or [])[: 3 * 255]
-    centis = max(1, int(round(1000.0 / fps / 10.0)))
-    w, h = first.size
-    encoder = _visprim.GifFrames(w, h, palette_lut(palette))
-    n = 0
+    palette = _GifPalette(first)
     with open(tmp, "wb") as fh:
-        # Header, logical screen with a 256-colour global table (the palette, then unused
-        # entries; the last index is the transparent one), loop forever (NETSCAPE2.0).
-        fh.write(b"GIF89a" + struct.pack("<HHBBB", w, h, 0xF7, 0, 0))
-        fh.write(table.ljust(768, b"\x00"))
-        fh.write(b"!\xff\x0bNETSCAPE2.0\x03\x01\x00\x00\x00")
-        for im in itertools.chain([first], it):
-            if im.size != (w, h):
-                raise ValueError(f"write_video: frame {n} is {im.size}, the first {(w, h)}")
-            rgb = im if im.mode == "RGB" else im.convert("RGB")
-            try:  # the image's own memory (Arrow C data interface), no copy
-                blocks, _ = encoder.frame_arrow(*rgb.__arrow_c_array__(), centis)
-            except (AttributeError, ValueError):  # an older Pillow, or not one block
-                blocks, _ = encoder.frame(rgb.tobytes("raw", "RGBX"), centis)
-            fh.write(blocks)
-            n += 1
+        fh.write(palette.header())
+        n = _gif_frames(fh, palette, itertools.chain([first], it), fps)
         fh.write(b";")
     return n
 
@@ -253,4 +281,87 @@ def write_video(path: str | Path, frames: Iterable[Image.Image], fps: float) -> 
             _gif(tmp, prefetched(frames), float(fps))
         else:
             _mp4(tmp, _yuv_frames(prefetched(frames)), float(fps))
+    return out
+
+
+def _join_mp4(parts: list[Path], out: Path) -> None:
+    """Join MP4 ``parts`` (the same encoder settings) into ``out`` without re-encoding
+    (ffmpeg's concat demuxer, streams copied)."""
+    import imageio_ffmpeg
+
+    listing = out.with_name(out.name + ".parts.txt")
+    quoted = ("'" + str(p.resolve()).replace("'", "'\\''") + "'" for p in parts)
+    listing.write_text("".join(f"file {q}\n" for q in quoted), encoding="utf-8")
+    try:
+        cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-v", "error", "-nostdin", "-f", "concat"]
+        cmd += ["-safe", "0", "-i", str(listing), "-c", "copy", "-f", "mp4", "-y", str(out)]
+        done = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    finally:
+        listing.unlink(missing_ok=True)
+    if done.returncode != 0:
+        why = (done.stderr.strip().splitlines() or ["no message"])[-1]
+        raise RuntimeError(f"{out}: joining the video's parts failed: {why}")
+
+
+def _write_part(
+    tmp: Path,
+    frame: Callable[[int], Image.Image],
+    indices: range,
+    fps: float,
+    palette: _GifPalette | None,
+) -> None:
+    """One part of :func:`write_video_parts`: frames ``indices`` drawn (in a background
+    thread) and encoded into ``tmp``: GIF blocks with ``palette``, or an MP4 without it."""
+    frames = prefetched(frame(i) for i in indices)
+    if palette is None:
+        _mp4(tmp, _yuv_frames(frames), fps)
+        return
+    with open(tmp, "wb") as fh:
+        _gif_frames(fh, palette, frames, fps)
+
+
+def write_video_parts(
+    path: str | Path,
+    frame: Callable[[int], Image.Image],
+    n_frames: int,
+    fps: float,
+    workers: int,
+) -> Path:
+    """Write ``frame(0) … frame(n_frames − 1)`` as :func:`write_video` does, drawn and
+    encoded by ``workers`` forked processes at once, each a consecutive part of the video
+    (:func:`visprim.sim.frame_workers.run_forked`), then joined: an MP4's parts without
+    re-encoding, a GIF's frame blocks after one header (each part's first frame is whole,
+    so the file shows the same pictures as :func:`write_video`'s). ``frame`` must draw
+    frame ``i`` the same whichever frame it drew before (a forked process starts at its
+    part's first frame). Atomic, like :func:`write_video`; returns the path."""
+    from visprim.sim.frame_workers import run_forked, split
+
+    out = check_video_path(path)
+    if not (np.isfinite(fps) and fps > 0):
+        raise ValueError(f"fps must be > 0 Hz, got {fps}")
+    if n_frames < 1:
+        raise ValueError("write_video: no frames to write")
+    gif = out.suffix.lower() == ".gif"
+    chunks = [c for c in split(n_frames, max(1, workers)) if len(c)]
+    with atomic_file(out) as tmp:
+        parts = [tmp.with_name(f"{tmp.name}.part{k}") for k in range(len(chunks))]
+        try:
+            palette = _GifPalette(frame(0).convert("RGB")) if gif else None
+            jobs = [
+                functools.partial(_write_part, part, frame, chunk, float(fps), palette)
+                for part, chunk in zip(parts, chunks, strict=True)
+            ]
+            run_forked(jobs, "a process drawing the video")
+            if palette is None:
+                _join_mp4(parts, tmp)
+            else:
+                with open(tmp, "wb") as fh:
+                    fh.write(palette.header())
+                    for part in parts:
+                        with open(part, "rb") as src:
+                            shutil.copyfileobj(src, fh, 1 << 20)
+                    fh.write(b";")
+        finally:
+            for part in parts:
+                part.unlink(missing_ok=True)
     return out
