@@ -87,7 +87,8 @@ EIGEN_ARRAYS = ("eigen_movements_mean", "eigen_movements_components")
 EIGEN_CHANNELS = 6
 #: Most instants an eigen-movement may have (the model writes 160).
 MAX_EIGEN_SAMPLES = 10_000
-#: How far the eigen-movements' columns may be from orthonormal (|EᵀE − I|, any entry).
+#: How far the eigen-movements' columns may be from orthonormal (the largest entry of
+#: EᵀE − I, in absolute value).
 EIGEN_ORTHONORMAL_TOL = 1e-6
 #: dtypes the arrays may have (little-endian float64 / int64).
 _DTYPES = {"<f8", "<i8"}
