@@ -894,15 +894,10 @@ def imitate(
     options = dict(budget_options or {})
     settings = _settings(budget, options).for_model(model)
     choice: dict[str, Any] | None = None
-    if budget is not None and len(_alternatives(model, settings, options)) > 1:
+    alternatives = _alternatives(model, settings, options)
+    if budget is not None and len(alternatives) > 1:
         parts, choice = _encoder_choice(
-            model,
-            pieces,
-            source,
-            name,
-            float(budget),
-            settings,
-            _alternatives(model, settings, options),
+            model, pieces, source, name, float(budget), settings, alternatives
         )
     else:
         shares = _shares(model, pieces, budget, settings)
