@@ -235,3 +235,14 @@ def test_learn_stores_the_book_and_imitate_budget_reports_the_choice(tmp_path, c
     assert d["whole_movement"] == (choice["chosen"] == "whole")
     assert d["numbers"] <= 12 * d["seconds"] + 1e-9
     assert f"{d['numbers']} numbers in" in printed and "whole" in printed
+
+
+def test_a_movement_too_long_to_describe_whole_is_refused_and_said(data, monkeypatch) -> None:
+    import visprim.imitate as imitation
+
+    model, trials = data
+    monkeypatch.setattr(imitation, "MAX_WHOLE_FRAMES", 10)
+    result = imitate(model, trials[-1], play=False, budget=30.0)
+    choice = result.metrics["description"]["encoder_choice"]
+    assert set(choice["frames_rms_deg"]) == {"cut", "uncut"} and choice["chosen"] != "whole"
+    assert "MAX_WHOLE_FRAMES" in choice["refused"]["whole"]

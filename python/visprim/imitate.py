@@ -637,6 +637,15 @@ def _encoder_choice(
     return tried[chosen][0], choice
 
 
+#: Most frames of a movement described whole (61 s at the study's 34 ms): the encoder's fit
+#: of the DCT coefficients to the bone directions
+#: (:func:`visprim.rate.fit_dct_coefficients`) holds a Jacobian of frames × 6 rows and
+#: (rate × seconds) columns, memory growing with the square of the frames; longer
+#: movements are described through the primitives only (the alternative is listed as
+#: refused).
+MAX_WHOLE_FRAMES = 1800
+
+
 def _whole_movement(
     model: Any, pieces: Sequence[Trial], name: str, budget: float
 ) -> list[_Segmented]:
@@ -656,6 +665,13 @@ def _whole_movement(
         segs = corpus.segments[0]
         if segs.shape[0] == 0:
             raise ValueError(f"{t.source or name}: no segment found; nothing to imitate")
+        times = corpus.times[0]
+        frames = int(np.sum((times >= segs[0, 0] - 1e-9) & (times <= segs[-1, 1] + 1e-9)))
+        if frames > MAX_WHOLE_FRAMES:
+            raise ValueError(
+                f"{frames} frames, more than the {MAX_WHOLE_FRAMES} of a movement described "
+                "whole (MAX_WHOLE_FRAMES)"
+            )
         prepared.append((corpus, segs))
     seconds = [float(g[-1, 1] - g[0, 0]) for _, g in prepared]
     arms = [c.angles[0].shape[1] // ARM_ANGLES for c, _ in prepared]
