@@ -246,3 +246,25 @@ def test_a_movement_too_long_to_describe_whole_is_refused_and_said(data, monkeyp
     choice = result.metrics["description"]["encoder_choice"]
     assert set(choice["frames_rms_deg"]) == {"cut", "uncut"} and choice["chosen"] != "whole"
     assert "MAX_WHOLE_FRAMES" in choice["refused"]["whole"]
+
+
+def test_a_two_arm_model_describes_both_arms_whole_within_the_budget() -> None:
+    """A two-arm model: its eigen-movements are one-arm (both arms of every training
+    trial, the left mirrored), and a recording described whole codes each arm."""
+    from _motion_data import movements
+
+    trials, _ = movements(3, seed=1)
+    model = PrimitiveModel(n_clusters=4, n_components=6, n_init=1).fit(trials[:-1])
+    assert model.arms_ == ("right", "left")
+    model.eigen_movements_ = learn_eigen_movements(model, trials[:-1])
+    # Two one-arm movements per training trial: fewer components than that.
+    assert model.eigen_movements_.n_components <= 2 * len(trials[:-1]) - 1
+    budget = 40.0
+    result = imitate(model, trials[-1], play=False, budget=budget)
+    d = result.metrics["description"]
+    errors = d["encoder_choice"]["frames_rms_deg"]
+    assert set(errors) == {"cut", "uncut", "whole"} and np.isfinite(errors["whole"])
+    assert d["numbers"] <= budget * d["seconds"] + 1e-9
+    assert _err(result) <= min(errors.values()) + 1e-9
+    assert result.human.shape[1] == 8
+    assert np.all(np.isfinite(result.rebuild_angles[result.covered]))

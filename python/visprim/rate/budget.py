@@ -158,7 +158,7 @@ class Description:
         if self.family == "eigen":
             return f"whole movement: {self.m} eigen-movement coefficient(s)"
         if self.family == "eigen/dct":
-            return f"whole movement: DCT of the 4 angles, {self.m} coefficient(s) in all"
+            return f"whole movement: DCT of the arm angles, {self.m} coefficient(s) in all"
         return {"nearest": "nearest primitive", "nearest+gain": "nearest primitive × gain"}[
             self.family
         ]
