@@ -101,7 +101,7 @@ def test_a_budget_uses_the_rate_benchmark_settings(data) -> None:
     d = result.metrics["description"]
     assert d["posture"] == RATE_OPTIONS["posture"].default
     assert d["max_stroke_s"] == RATE_OPTIONS["max_stroke"].default
-    assert "stroke_cut_choice" not in d
+    assert "encoder_choice" not in d
     assert "strokes cut at" in result.summary() and "uncut" in plain.summary()
     # No stroke longer than max_stroke, and the cuts tile the uncut segments.
     durations = result.segments[:, 1] - result.segments[:, 0]
@@ -170,7 +170,7 @@ def test_the_encoder_chooses_to_cut_strokes_or_not(data, budget) -> None:
     span = imitate(model, trial, play=False).metrics["description"]["seconds"]
     result = imitate(model, trial, play=False, budget=budget)
     d = result.metrics["description"]
-    choice = d["stroke_cut_choice"]
+    choice = d["encoder_choice"]
     assert choice["numbers"] == 1 and choice["cut_at_s"] == RATE_OPTIONS["max_stroke"].default
     assert d["numbers_per_s"] <= budget * (1 + 1e-12)
     # Each alternative forced, within the same numbers: none lies closer than the choice.

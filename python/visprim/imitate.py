@@ -289,10 +289,13 @@ def _size_line(d: dict[str, Any] | None) -> str:
         return "  description: -"
     budget = d.get("budget_numbers_per_s")
     cut = d.get("max_stroke_s")
-    settings = f"; posture as {d.get('posture_numbers_per_segment', '-')}; strokes " + (
-        "uncut" if cut is None else f"cut at {cut:g} s"
-    )
-    choice = d.get("stroke_cut_choice")
+    if d.get("whole_movement"):
+        settings = f"; the whole movement, no segments ({d.get('whole_movement_code')})"
+    else:
+        settings = f"; posture as {d.get('posture_numbers_per_segment', '-')}; strokes " + (
+            "uncut" if cut is None else f"cut at {cut:g} s"
+        )
+    choice = d.get("encoder_choice")
     if choice:
         errs = ", ".join(f"{k} {v:.1f}°" for k, v in choice["frames_rms_deg"].items())
         settings += f" (encoder's choice by its rebuild of the frames: {errs}; 1 number)"
@@ -563,17 +566,37 @@ def _frames_error_deg(parts: Sequence[_Segmented]) -> float:
     return float(np.sqrt(total / n)) if n else float("inf")
 
 
-#: Numbers the encoder stores to say whether strokes were cut (one flag per movement).
+#: Numbers the encoder stores to say which alternative it kept (one flag per movement).
 CUT_CHOICE_NUMBERS = 1
 
 
-def _cut_or_not(
-    model: Any, pieces: Sequence[Trial], source: Source, name: str, budget: float, settings: Any
+def _alternatives(model: Any, settings: Any, options: dict[str, Any]) -> tuple[str, ...]:
+    """The descriptions the encoder chooses among within a budget: strokes cut at
+    ``settings.max_stroke`` and uncut (unless ``options`` forces ``max_stroke``: then that
+    one alone), and the whole movement through the model's eigen-movements when it has
+    them (``model.eigen_movements_``, written by ``visprim learn``) and the strokes are
+    not forced."""
+    if "max_stroke" in options:
+        return ("forced",)
+    cuts = ("cut", "uncut") if settings.max_stroke is not None else ("uncut",)
+    whole = ("whole",) if getattr(model, "eigen_movements_", None) is not None else ()
+    return cuts + whole
+
+
+def _encoder_choice(
+    model: Any,
+    pieces: Sequence[Trial],
+    source: Source,
+    name: str,
+    budget: float,
+    settings: Any,
+    alternatives: Sequence[str],
 ) -> tuple[list[_Segmented], dict[str, Any]]:
-    """The movement described both ways, strokes cut at ``settings.max_stroke`` and not cut,
-    each within ``budget`` less the :data:`CUT_CHOICE_NUMBERS` flag that says which; the one
-    whose rebuilt frames lie closer to the movement's (:func:`_frames_error_deg`) is kept.
-    The same rule for every recording: the encoder has the movement it describes."""
+    """The movement described by each of ``alternatives`` (:func:`_alternatives`: strokes
+    cut at ``settings.max_stroke``, uncut, the whole movement), each within ``budget`` less
+    the :data:`CUT_CHOICE_NUMBERS` flag that says which; the one whose rebuilt frames lie
+    closer to the movement's (:func:`_frames_error_deg`) is kept. The same rule for every
+    recording: the encoder has the movement it describes."""
     from dataclasses import replace
 
     span = max(
@@ -583,13 +606,17 @@ def _cut_or_not(
     inner = budget - CUT_CHOICE_NUMBERS / span
     tried: dict[str, tuple[list[_Segmented], float]] = {}
     refused: dict[str, str] = {}
-    for key, s in (("cut", settings), ("uncut", replace(settings, max_stroke=None))):
+    for key in alternatives:
         try:
-            shares = _shares(model, pieces, inner, s)
-            parts = [
-                _segment_and_rebuild(model, t, source, name, b, s)
-                for t, b in zip(pieces, shares, strict=True)
-            ]
+            if key == "whole":
+                parts = _whole_movement(model, pieces, name, inner)
+            else:
+                s = settings if key == "cut" else replace(settings, max_stroke=None)
+                shares = _shares(model, pieces, inner, s)
+                parts = [
+                    _segment_and_rebuild(model, t, source, name, b, s)
+                    for t, b in zip(pieces, shares, strict=True)
+                ]
         except ValueError as e:
             refused[key] = str(e)
             continue
@@ -599,6 +626,7 @@ def _cut_or_not(
     chosen = min(tried, key=lambda k: tried[k][1])
     choice = {
         "chosen": chosen,
+        "alternatives": list(alternatives),
         "cut_at_s": settings.max_stroke,
         "rule": "the alternative whose rebuilt frames lie closest to the movement's "
         "(bone-direction RMS over the covered frames), each within the budget less the flag",
@@ -609,29 +637,115 @@ def _cut_or_not(
     return tried[chosen][0], choice
 
 
+#: Most frames of a movement described whole (61 s at the study's 34 ms): the encoder's fit
+#: of the DCT coefficients to the bone directions
+#: (:func:`visprim.rate.fit_dct_coefficients`) holds a Jacobian of frames × 6 rows and
+#: (rate × seconds) columns, memory growing with the square of the frames; longer
+#: movements are described through the primitives only (the alternative is listed as
+#: refused).
+MAX_WHOLE_FRAMES = 1800
+
+
+def _whole_movement(
+    model: Any, pieces: Sequence[Trial], name: str, budget: float
+) -> list[_Segmented]:
+    """Each piece (one arm, or both arms of a two-arm model) described whole, without
+    segments, through the model's eigen-movements or the DCT of its arm angles
+    (:func:`visprim.rate.budget.describe_movement`, code
+    :data:`~visprim.rate.budget.WHOLE_FAMILY`), over the span its segments cover. Every arm
+    gets ``budget × span / Σ seconds`` numbers per second of its own movement (``span`` the
+    longest piece's seconds), so that all together fit ``budget`` numbers per second of
+    ``span``. The rebuild is the described bone directions, one curve over the span."""
+    from visprim.rate.budget import ARM_ANGLES, Description, describe_movement
+
+    book = model.eigen_movements_
+    prepared = []
+    for t in pieces:
+        corpus = model.prepare([t])
+        segs = corpus.segments[0]
+        if segs.shape[0] == 0:
+            raise ValueError(f"{t.source or name}: no segment found; nothing to imitate")
+        times = corpus.times[0]
+        frames = int(np.sum((times >= segs[0, 0] - 1e-9) & (times <= segs[-1, 1] + 1e-9)))
+        if frames > MAX_WHOLE_FRAMES:
+            raise ValueError(
+                f"{frames} frames, more than the {MAX_WHOLE_FRAMES} of a movement described "
+                "whole (MAX_WHOLE_FRAMES)"
+            )
+        prepared.append((corpus, segs))
+    seconds = [float(g[-1, 1] - g[0, 0]) for _, g in prepared]
+    arms = [c.angles[0].shape[1] // ARM_ANGLES for c, _ in prepared]
+    rate = budget * max(seconds) / sum(s * a for s, a in zip(seconds, arms, strict=True))
+    out = []
+    for (corpus, segs), sec in zip(prepared, seconds, strict=True):
+        times = corpus.times[0]
+        span = (times >= segs[0, 0] - 1e-9) & (times <= segs[-1, 1] + 1e-9)
+        values, descs = [], []
+        for c in range(0, corpus.angles[0].shape[1], ARM_ANGLES):
+            arm = np.ascontiguousarray(corpus.angles[0][span, c : c + ARM_ANGLES])
+            v, d = describe_movement(book, from_angles(arm, "directions"), arm, sec, rate)
+            values.append(v)
+            descs.append(d)
+        desc = descs[0]
+        if len(descs) > 1:  # both arms of a two-arm model: one description of their sum
+            family = "eigen" if all(d.family == "eigen" for d in descs) else "eigen/dct"
+            desc = Description(family, sum(d.m for d in descs), sum(d.numbers for d in descs), sec)
+        bounds = np.array([[times[span][0], times[span][-1]]])
+        rebuild = Rebuild(JoinedTrajectory([np.concatenate(values, axis=1)], bounds), "directions")
+        out.append(
+            _Segmented(
+                corpus.times_all,
+                corpus.angles_all,
+                bounds,
+                np.array([-1], dtype=np.int64),
+                np.array([np.nan]),
+                rebuild,
+                str(corpus.segmentation.method),
+                desc,
+            )
+        )
+    return out
+
+
 def _description_metrics(
     parts: Sequence[_Segmented], budget: float | None, choice: dict[str, Any] | None = None
 ) -> dict[str, Any]:
     """The size of the description (numbers per second of movement), per arm and in all;
-    ``choice``: the encoder's cut-or-not choice (:func:`_cut_or_not`), its flag counted."""
+    ``choice``: the encoder's choice among its alternatives (:func:`_encoder_choice`), its
+    flag counted."""
     descs = [p.description for p in parts]
     numbers = sum(d.numbers for d in descs) + (choice["numbers"] if choice else 0)
     seconds = max(d.seconds for d in descs)
+    whole = descs[0].family.startswith("eigen")
     out: dict[str, Any] = {
         "budget_numbers_per_s": budget,
         "numbers": numbers,
         "seconds": seconds,
         "numbers_per_s": numbers / seconds if seconds > 0 else float("inf"),
         "description": "; ".join(dict.fromkeys(d.label for d in descs)),
-        "posture": descs[0].settings.posture,
-        "posture_numbers_per_segment": _posture_count(descs[0]),
-        "max_stroke_s": descs[0].settings.max_stroke,
-        "counted": "per movement its start time; per segment the primitive id (none for "
-        "the projection), the duration, the posture and the description's coefficients",
+        "whole_movement": whole,
+        "posture": None if whole else descs[0].settings.posture,
+        "posture_numbers_per_segment": "none (no segments)" if whole else _posture_count(descs[0]),
+        "max_stroke_s": None if whole else descs[0].settings.max_stroke,
+        "counted": (
+            "per movement (arm) its start time, its duration, the number that says which code "
+            "(eigen-movements, or the split of the DCT coefficients over the 4 angle channels) "
+            "and the coefficients"
+            if whole
+            else "per movement its start time; per segment the primitive id (none for the "
+            "projection), the duration, the posture and the description's coefficients"
+        ),
     }
+    if whole:
+        from visprim.rate.budget import WHOLE_FAMILY
+
+        out["whole_movement_code"] = WHOLE_FAMILY
     if choice is not None:
-        out["stroke_cut_choice"] = choice
-        out["counted"] += f"; {choice['numbers']} number for the choice to cut strokes or not"
+        out["encoder_choice"] = choice
+        out["counted"] += (
+            f"; {choice['numbers']} number for the encoder's choice among "
+            + ", ".join(choice["alternatives"])
+        )
     if len(descs) > 1:
         out["arms"] = {side: d.to_dict() for side, d in zip(ARM_SIDES, descs, strict=False)}
     return out
@@ -757,14 +871,17 @@ def imitate(
         (:data:`visprim.params.RATE_OPTIONS`: each segment's posture as the unit bone
         directions of its mean, 4 numbers per arm; :func:`visprim.rate.budget.budget_settings`)
         and, unless ``budget_options`` gives ``max_stroke``, the encoder describes the
-        movement both with strokes longer than RATE_OPTIONS ``max_stroke`` (0.8 s) cut into
-        equal parts and uncut, each within the budget less one number (the flag that says
-        which, :data:`CUT_CHOICE_NUMBERS`), and keeps the one whose rebuilt frames lie closer
-        to the movement's (bone-direction RMS, :func:`_cut_or_not`;
-        ``metrics["description"]["stroke_cut_choice"]``). Without a budget, as the model
-        does (6 posture numbers per arm, strokes uncut).
+        movement with strokes longer than RATE_OPTIONS ``max_stroke`` (0.8 s) cut into
+        equal parts, uncut, and, if the model has eigen-movements (``eigen_movements_``,
+        stored by ``visprim learn``), whole without segments
+        (:func:`visprim.rate.budget.describe_movement`), each within the budget less one
+        number (the flag that says which, :data:`CUT_CHOICE_NUMBERS`), and keeps the one
+        whose rebuilt frames lie closest to the movement's (bone-direction RMS,
+        :func:`_encoder_choice`; ``metrics["description"]["encoder_choice"]``). Without a
+        budget, as the model does (6 posture numbers per arm, strokes uncut).
     budget_options : with ``budget``, settings in place of those defaults (``posture``:
-        "mean" or "unit"; ``max_stroke``: seconds or None, no choice then).
+        "mean" or "unit"; ``max_stroke``: seconds or None, segments with that cut then, no
+        choice).
 
     Raises
     ------
@@ -793,8 +910,11 @@ def imitate(
     options = dict(budget_options or {})
     settings = _settings(budget, options).for_model(model)
     choice: dict[str, Any] | None = None
-    if budget is not None and "max_stroke" not in options and settings.max_stroke is not None:
-        parts, choice = _cut_or_not(model, pieces, source, name, float(budget), settings)
+    alternatives = _alternatives(model, settings, options)
+    if budget is not None and len(alternatives) > 1:
+        parts, choice = _encoder_choice(
+            model, pieces, source, name, float(budget), settings, alternatives
+        )
     else:
         shares = _shares(model, pieces, budget, settings)
         parts = [

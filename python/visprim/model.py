@@ -164,6 +164,12 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
     frame_period_ : float or None
         Frame period of the training trials, seconds (None: recordings at their own rates,
         or bare vectors); recordings given to the model later are resampled to it.
+    eigen_movements_ : EigenMovements or None
+        The principal components of the training movements, whole (one arm each,
+        :func:`visprim.rate.budget.learn_eigen_movements`): ``visprim learn`` stores them,
+        and ``visprim imitate --budget`` also considers describing a recording whole
+        through them. None unless set (``fit`` does not compute them; older model files
+        have none).
 
     See Also
     --------
@@ -477,6 +483,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         self.error_tables_: ErrorTables | None = None
         self.provenance_ = source
         self.frame_period_ = source.frame_period
+        self.eigen_movements_: Any = None
         return self
 
     # ------------------------------------------------------------------ properties
@@ -763,6 +770,10 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         arrays: dict[str, Any] = {name: getattr(self, name + "_") for name in REQUIRED_ARRAYS}
         if include_vectors and getattr(self, "training_vectors_", None) is not None:
             arrays["training_vectors"] = self.training_vectors_
+        book = getattr(self, "eigen_movements_", None)
+        if book is not None:
+            arrays["eigen_movements_mean"] = book.mean
+            arrays["eigen_movements_components"] = book.components
         tables = getattr(self, "error_tables_", None)
         fitted = {name: _fitted_value(getattr(self, name + "_")) for name in FITTED_FIELDS}
         header = {
@@ -799,6 +810,7 @@ class PrimitiveModel(TransformerMixin, ClusterMixin, BaseEstimator):
         for name in REQUIRED_ARRAYS:
             setattr(model, name + "_", a[name])
         model.training_vectors_ = a.get("training_vectors")
+        model.eigen_movements_ = _eigen_movements(a)
         model.training_projections_ = None
         model.n_features_in_ = int(a["mean"].shape[0])
         problem = check_fitted_arrays(model)
@@ -1005,6 +1017,16 @@ def _as_provenance(source: Provenance | Mapping[str, Any]) -> Provenance:
     if isinstance(source, Mapping):
         return Provenance.from_dict(source)
     raise TypeError(f"source must be a visprim.provenance.Provenance, got {type(source).__name__}")
+
+
+def _eigen_movements(arrays: Mapping[str, NDArray[Any]]) -> Any:
+    """The eigen-movements of a model file's (checked) arrays, or None (older files)."""
+    if "eigen_movements_mean" not in arrays:
+        return None
+    from visprim.rate.descriptions import EigenMovements
+
+    mean = arrays["eigen_movements_mean"]
+    return EigenMovements(mean, arrays["eigen_movements_components"], mean.size // 6, {})
 
 
 def _fitted_value(value: Any) -> Any:

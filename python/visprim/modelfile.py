@@ -25,7 +25,14 @@ A NumPy ``.npz`` (zip) archive of ``.npy`` members (never pickles), with these m
 ``cluster_centers`` (k, f) in the projection space; ``labels`` (N,) int64;
 ``segment_trial`` (N,) int64; ``segment_starts`` / ``segment_ends`` (N,) seconds;
 ``primitive_durations`` (k,) seconds; ``training_vectors`` (N, d) radians (written by
-default, so that a loaded model computes error tables like a fitted one).
+default, so that a loaded model computes error tables like a fitted one);
+``eigen_movements_mean`` (6 n,) and ``eigen_movements_components`` (6 n, g), both or
+neither: the eigen-movements of the training movements (one arm's two unit bone directions
+at n instants over each movement's own duration, flattened instant by instant; the mean
+movement, and g ≥ 1 orthonormal components; written by ``visprim learn``,
+:func:`visprim.rate.budget.learn_eigen_movements`, and read for ``visprim imitate
+--budget``). Files without them load as before; a reader older than them refuses files that
+have them (unknown array).
 
 Writing is atomic (:func:`visprim.atomic.atomic_file`): the archive goes to a temporary
 file ``.<name>.visprim-tmp-<pid>-<random>.tmp`` in the target's folder, is flushed to disk,
@@ -73,7 +80,16 @@ REQUIRED_ARRAYS = (
     "segment_ends",
     "primitive_durations",
 )
-OPTIONAL_ARRAYS = ("training_vectors",)
+OPTIONAL_ARRAYS = ("training_vectors", "eigen_movements_mean", "eigen_movements_components")
+#: The eigen-movements' arrays: both or neither (files written before them have neither).
+EIGEN_ARRAYS = ("eigen_movements_mean", "eigen_movements_components")
+#: Coordinates of one arm's two unit bone directions per instant of an eigen-movement.
+EIGEN_CHANNELS = 6
+#: Most instants an eigen-movement may have (the model writes 160).
+MAX_EIGEN_SAMPLES = 10_000
+#: How far the eigen-movements' columns may be from orthonormal (the largest entry of
+#: EᵀE − I, in absolute value).
+EIGEN_ORTHONORMAL_TOL = 1e-6
 #: dtypes the arrays may have (little-endian float64 / int64).
 _DTYPES = {"<f8", "<i8"}
 #: Largest header accepted (bytes); real headers are a few kB (plus trial names).
@@ -470,3 +486,39 @@ def check_shapes(path: Path, arrays: Mapping[str, NDArray[Any]]) -> None:
     for name in ("mean", "eigenvalues", "eigenvectors", "cluster_centers"):
         if not np.all(np.isfinite(arrays[name])):
             raise _fail(path, f"damaged model file: {name!r} holds NaN or infinity")
+    check_eigen_movements(path, arrays)
+
+
+def check_eigen_movements(path: Path, arrays: Mapping[str, NDArray[Any]]) -> None:
+    """The eigen-movements, if the file has them (:data:`EIGEN_ARRAYS`, both or neither):
+    a mean of 6 n finite bone-direction coordinates in [−1, 1] for 2 ≤ n ≤
+    :data:`MAX_EIGEN_SAMPLES` instants, and (6 n, g) components, 1 ≤ g ≤ 6 n, finite and
+    orthonormal (within :data:`EIGEN_ORTHONORMAL_TOL`)."""
+    present = [name for name in EIGEN_ARRAYS if name in arrays]
+    if not present:
+        return
+    if len(present) != len(EIGEN_ARRAYS):
+        raise _fail(path, f"damaged model file: {present[0]!r} without its companion")
+
+    def bad(why: str) -> ModelFileError:
+        return _fail(path, f"damaged model file: the eigen-movements {why}")
+
+    mean, comps = arrays["eigen_movements_mean"], arrays["eigen_movements_components"]
+    if mean.dtype.kind != "f" or comps.dtype.kind != "f":
+        raise bad("are not floating-point arrays")
+    size = mean.shape[0] if mean.ndim == 1 else 0
+    n = size // EIGEN_CHANNELS
+    if mean.ndim != 1 or size % EIGEN_CHANNELS or not 2 <= n <= MAX_EIGEN_SAMPLES:
+        raise bad(
+            f"mean has shape {mean.shape}, not ({EIGEN_CHANNELS} n,) for 2 <= n <= "
+            f"{MAX_EIGEN_SAMPLES} instants"
+        )
+    if comps.ndim != 2 or comps.shape[0] != size or not 1 <= comps.shape[1] <= size:
+        raise bad(f"components have shape {comps.shape}, not ({size}, 1..{size})")
+    if not (np.all(np.isfinite(mean)) and np.all(np.isfinite(comps))):
+        raise bad("hold NaN or infinity")
+    if np.max(np.abs(mean)) > 1.0 + 1e-9:
+        raise bad("mean is not bone directions (a coordinate beyond [-1, 1])")
+    gram = comps.T @ comps
+    if np.max(np.abs(gram - np.eye(gram.shape[0]))) > EIGEN_ORTHONORMAL_TOL:
+        raise bad("components are not orthonormal")

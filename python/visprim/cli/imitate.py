@@ -170,8 +170,9 @@ def register(sub: Any) -> None:
         default=None,
         metavar="N",
         help="rebuild through the best description within N numbers per second of movement "
-        "(nearest primitive, with its gain, with residual coefficients, or each segment's "
-        "projection); imitation.json says which one was used",
+        "(nearest primitive, with its gain, with residual or DCT coefficients, or each "
+        "segment's projection; or the movement whole through the eigen-movements that "
+        "`visprim learn` stores in the model file); imitation.json says which one was used",
     )
     from visprim.cli.evaluate import _stroke
     from visprim.params import RATE_OPTIONS
@@ -189,8 +190,9 @@ def register(sub: Any) -> None:
         default=argparse.SUPPRESS,
         metavar="S",
         help=f"with --budget: {rate['max_stroke'].help}; 'none' or seconds (default: the "
-        f"encoder describes the movement both cut at {rate['max_stroke'].default} s and uncut, "
-        "and keeps the one whose rebuilt frames lie closer, counting 1 number for the choice)",
+        f"encoder describes the movement cut at {rate['max_stroke'].default} s, uncut and, if "
+        "the model file has eigen-movements, whole, and keeps the one whose rebuilt frames lie "
+        "closest, counting 1 number for the choice; a given S forces segments)",
     )
     p.add_argument(
         "--servo",

@@ -1,5 +1,10 @@
 """``visprim learn``: learn primitives from recordings and write the model file.
 
+The model file also holds the eigen-movements of the training movements, whole
+(:func:`visprim.rate.budget.learn_eigen_movements`), which ``visprim imitate --budget``
+considers beside the primitives; learning from a lazy corpus (``--stream``, ``--dask``)
+stores none.
+
 Fewer segments than ``--clusters``: ``learn`` stops with an error naming the number of
 segments found (it does not silently learn fewer primitives than asked); lower
 ``--clusters`` or give more recordings."""
@@ -32,10 +37,20 @@ def run(args: argparse.Namespace) -> int:
             model.fit(trials, source=source)
         except ValueError as exc:
             raise common.CLIError(_with_fix(str(exc))) from None
+        # The whole training movements' principal components, for `imitate --budget`.
+        from visprim.rate.budget import learn_eigen_movements
+
+        model.eigen_movements_ = learn_eigen_movements(model, trials)
         st.step("error tables")
         tables = model.error_table()
     path = save_model(model, out)
     print(common.summary(model, len(trials)))
+    book = model.eigen_movements_
+    if book is not None:
+        print(
+            f"eigen-movements: {book.n_components} of the training movements, whole (one arm "
+            f"each, {book.n_samples} instants), for imitate --budget"
+        )
     print()
     from visprim.report.paper import tables_in_degrees
 

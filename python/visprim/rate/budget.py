@@ -21,6 +21,14 @@ from visprim.rate.descriptions import (
 #: Most DCT coefficients per channel of the residual among the candidates.
 DCT_Q_MAX = 6
 
+#: The whole-movement code of ``visprim imitate --budget`` (:func:`describe_movement`): what
+#: the nested leave-one-actor-out chose on HDM05 at every budget from 10 to 20 numbers per
+#: second (docs/rate.rst).
+WHOLE_FAMILY = "eigen/dct-fit3"
+#: Channels of one arm's bone directions (upper arm and forearm, 3 each) and angles.
+ARM_DIRECTIONS = 6
+ARM_ANGLES = 4
+
 # ---------------------------------------------------------------------------- settings
 
 
@@ -150,7 +158,7 @@ class Description:
         if self.family == "eigen":
             return f"whole movement: {self.m} eigen-movement coefficient(s)"
         if self.family == "eigen/dct":
-            return f"whole movement: DCT of the 4 angles, {self.m} coefficient(s) in all"
+            return f"whole movement: DCT of the arm angles, {self.m} coefficient(s) in all"
         return {"nearest": "nearest primitive", "nearest+gain": "nearest primitive × gain"}[
             self.family
         ]
@@ -333,7 +341,7 @@ def describe_movement(
     angles: NDArray[np.float64],
     seconds: float,
     budget: float,
-    code_family: str = "eigen/dct-fit3",
+    code_family: str = WHOLE_FAMILY,
 ) -> tuple[NDArray[np.float64], Description]:
     """One whole movement (no segments) described within ``budget`` numbers per second
     through the eigen-movements ``book`` (:class:`~visprim.rate.descriptions.EigenMovements`,
@@ -356,3 +364,44 @@ def describe_movement(
     family = "eigen" if code == "eigen" else "eigen/dct"
     values = rebuilt if code == "eigen" else from_angles(rebuilt, "directions")
     return values, Description(family, m, numbers, float(seconds))
+
+
+# ------------------------------------------------------------------ a model's eigen-movements
+
+
+def one_arm_movements(
+    model: Any, trials: Sequence[Any]
+) -> list[tuple[NDArray[np.float64], NDArray[np.float64], float]]:
+    """The one-arm movements of ``trials`` as a fitted ``model`` segments them: for every
+    trial with a segment and every arm of it, the low-passed bone directions ``(T, 6)``
+    and arm angles ``(T, 4)`` rad (a left arm in the mirror convention, so it moves like a
+    right arm) over the span its segments cover, and that span, seconds. These are the
+    movements :func:`describe_movement` describes, in training and in imitation alike."""
+    from visprim.features import from_angles
+
+    corpus = model.prepare(list(trials))
+    out = []
+    for times, angles, segs in zip(corpus.times, corpus.angles, corpus.segments, strict=True):
+        if segs.shape[0] == 0:
+            continue
+        span = (times >= segs[0, 0] - 1e-9) & (times <= segs[-1, 1] + 1e-9)
+        seconds = float(segs[-1, 1] - segs[0, 0])
+        for c in range(0, angles.shape[1], ARM_ANGLES):
+            arm = np.ascontiguousarray(angles[span, c : c + ARM_ANGLES])
+            out.append((from_angles(arm, "directions"), arm, seconds))
+    return out
+
+
+def learn_eigen_movements(model: Any, trials: Sequence[Any]) -> Any:
+    """The eigen-movements (:class:`~visprim.rate.descriptions.EigenMovements`) of a
+    fitted ``model``'s training ``trials``: :func:`~visprim.rate.fit_eigen_movements` of
+    their one-arm movements (:func:`one_arm_movements`, every arm the model has, the left
+    mirrored), what ``visprim learn`` stores in the model file for ``imitate --budget``.
+    None with fewer than two movements or no variance among them (nothing to learn)."""
+    from visprim.rate.descriptions import fit_eigen_movements
+
+    movements = one_arm_movements(model, trials)
+    if len(movements) < 2:
+        return None
+    book = fit_eigen_movements([d for d, _, _ in movements])
+    return book if book.n_components > 0 else None
