@@ -8,7 +8,10 @@ parts. The other processes are forks of the parent, so each inherits the drawer 
 built and nothing is pickled.
 
 Workers are used only where the parent can fork them safely and gains from them: Linux, at
-least two usable cores and enough frames (:func:`draw_workers`). A worker that fails raises
+least two usable cores and enough frames (:func:`draw_workers`). A fork holds only the
+thread that made it, so a job must not use a thread pool the parent started (Rayon's in
+visprim's kernels, a BLAS's for large products): the video's parts draw with Pillow and
+encode with the GIF encoder or an ffmpeg process, which use none. A worker that fails raises
 its error (type and message) in the parent; an interrupt or an error in the parent stops the
 workers: they ignore SIGINT (the parent decides), and SIGTERM makes them clean up (stop
 their encoder) and exit.
