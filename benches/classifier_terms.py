@@ -9,7 +9,9 @@ candidate set of terms then gets its weights chosen by the inner leave-one-group
 the training groups (as ``MotionClassifier.fit`` does: weights from
 ``visprim.params.TERM_WEIGHTS``, first best, the first term at 1) and is scored on the
 held-out group only. Printed: the outer accuracy of each candidate set beside the DTW
-1-NN baseline. The default set is ``coordinates + segments + velocity + duration + torso``
+1-NN baseline (on the arm directions, as ``visprim evaluate`` gives it, and on the arm
+directions with the torso pose appended, 6 numbers more per frame, unweighted). The
+default set is ``coordinates + segments + velocity + duration + torso``
 (``torso``: :func:`visprim.classify.torso_pose`). The other descriptions of the trunk
 measured (each as the fifth term in place of ``torso``) are defined here: the shoulder
 midpoint alone, the up axis alone, the shoulders' height alone, the shoulder midpoint's
@@ -142,6 +144,9 @@ def main() -> None:
         t0 = time.perf_counter()
         y, g, movs = bench.labels, bench.groups, bench.movements
         base = dtw_matrix([arm_directions(t) for t in movs])
+        # The baseline given the trunk too: the same data as the torso term.
+        base_torso = dtw_matrix([np.hstack([arm_directions(t), torso_pose(t)]) for t in movs])
+        base_torso_right = 0
         sets = {name: ([terms], k) for name, (terms, k) in CANDIDATES.items()}
         sets[CHOSEN_TRUNK] = ([(*_ARMS, trunk) for trunk in TRUNK], 1)
         right = {name: 0 for name in sets}
@@ -149,6 +154,8 @@ def main() -> None:
         picks: dict[str, list[str]] = {DEFAULT: [], CHOSEN_TRUNK: []}
         for group, train, test in group_folds(g):
             base_right += int(np.sum(y[train][np.argmin(base[np.ix_(test, train)], 1)] == y[test]))
+            nearest = np.argmin(base_torso[np.ix_(test, train)], 1)
+            base_torso_right += int(np.sum(y[train][nearest] == y[test]))
             costs = fold_costs(movs, train)
             for name, (alternatives, k) in sets.items():
                 best, chosen, pick = -1.0, None, ""
@@ -171,6 +178,10 @@ def main() -> None:
             f"({time.perf_counter() - t0:.0f} s)"
         )
         print(f"  DTW 1-NN baseline on the arm directions: {base_right / n:.3f}")
+        print(
+            "  DTW 1-NN baseline on the arm directions and the torso pose: "
+            f"{base_torso_right / n:.3f} ({base_torso_right}/{n})"
+        )
         for name, r in right.items():
             print(f"  {name}: {r / n:.3f} ({r}/{n})")
         for name, chosen in picks.items():
