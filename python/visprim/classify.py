@@ -482,7 +482,8 @@ def torso_pose(trial: Trial) -> NDArray[np.float64]:
     shoulder centres (one shoulder for a one-arm trial) minus its place at the first frame,
     metres in the recording frame (+z up, the subject facing +x at the first frame), and the
     torso's up axis (``body_frame[:, :, 2]``, a unit vector: a lean of δ rad moves it by
-    ≈ δ; +z for a trial without a torso). What the arms' root does: a step or a hop carries
+    ≈ δ; +z for a trial without a torso, whose recording axes are also not turned to the
+    subject's heading). What the arms' root does: a step or a hop carries
     the shoulders, a crouch or a bend lowers them and tilts the trunk, which the arm
     directions in the torso's axes do not see. Shoulder centres as in
     :func:`arm_directions`."""
