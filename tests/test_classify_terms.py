@@ -68,7 +68,8 @@ def test_zero_weights_leave_the_primitive_path_alone() -> None:
     train, y = _data(3, seed=0)
     test, _ = _data(1, seed=1)
     only = MotionClassifier(model_params=SMALL_MODEL, term_weights=(0.0,)).fit(train, y)
-    assert only.term_weights_ == dict.fromkeys(COMBINED_TERMS, 0.0) | {"coordinates": 1.0}
+    terms = (*COMBINED_TERMS, "torso")
+    assert only.term_weights_ == dict.fromkeys(terms, 0.0) | {"coordinates": 1.0}
     path = MotionClassifier(model_params=SMALL_MODEL, method="coordinates").fit(train, y)
     np.testing.assert_allclose(
         only.distances(test) * only.scales_["coordinates"], path.distances(test), rtol=1e-12
@@ -84,8 +85,8 @@ def test_weights_are_chosen_on_the_training_groups() -> None:
     y = ["brisk"] * len(base) + ["slow"] * len(base)
     groups = [i // 3 for i in range(len(base))] * 2  # three groups, each with every kind
     clf = MotionClassifier(model_params=SMALL_MODEL).fit(train, y, groups=groups)
-    assert len(clf.inner_accuracy_) == len(params.TERM_WEIGHTS) ** 3
-    chosen = tuple(clf.term_weights_[t] for t in COMBINED_TERMS[1:])
+    assert len(clf.inner_accuracy_) == len(params.TERM_WEIGHTS) ** 4
+    chosen = tuple(clf.term_weights_[t] for t in (*COMBINED_TERMS[1:], "torso"))
     assert clf.inner_accuracy_[chosen] == max(clf.inner_accuracy_.values()) == 1.0
     assert clf.term_weights_["velocity"] + clf.term_weights_["duration"] > 0
     new, _ = _data(1, seed=5)

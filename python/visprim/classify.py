@@ -477,6 +477,30 @@ def arm_velocities(trial: Trial) -> NDArray[np.float64]:
     return np.diff(d, axis=0) / dt
 
 
+def torso_pose(trial: Trial) -> NDArray[np.float64]:
+    """Where the trunk is and how it leans, per frame: (T, 6). The midpoint of the arms'
+    shoulder centres (one shoulder for a one-arm trial) minus its place at the first frame,
+    metres in the recording frame (+z up, the subject facing +x at the first frame), and the
+    torso's up axis (``body_frame[:, :, 2]``, a unit vector: a lean of δ rad moves it by
+    ≈ δ; +z for a trial without a torso, whose recording axes are also not turned to the
+    subject's heading). What the arms' root does: a step or a hop carries
+    the shoulders, a crouch or a bend lowers them and tilts the trunk, which the arm
+    directions in the torso's axes do not see. Shoulder centres as in
+    :func:`arm_directions`."""
+    shoulders = []
+    for a in range(trial.n_arms):
+        if trial.joints is not None:
+            shoulders.append(trial.joints[:, 3 * a])
+        else:
+            shoulders.append(implied_joint_centres(trial.markers[:, 4 * a : 4 * a + 4])[:, 0])
+    mid = np.mean(shoulders, axis=0)
+    if trial.body_frame is not None:
+        up = trial.body_frame[:, :, 2]
+    else:
+        up = np.tile([0.0, 0.0, 1.0], (trial.n_frames, 1))
+    return np.hstack([mid - mid[0], up])
+
+
 def duration_costs(
     queries: Sequence[Trial], references: Sequence[Trial] | None = None
 ) -> NDArray[np.float64]:
@@ -745,20 +769,26 @@ class MotionClassifier(_NearestSequences):
       (:func:`primitive_coordinates`): the movement as a path in the primitives' space.
     * ``"segments"``: the sequence of the segments' f-D projections (one point per
       segment, in time order): which strokes, in which order.
-    * ``"combined"`` (default): the sum of four costs (:data:`COMBINED_TERMS`), each
-      divided by its median over pairs of training movements::
+    * ``"combined"`` (default): the sum of five costs (:data:`COMBINED_TERMS` and, with
+      ``torso=True``, the trunk's), each divided by its median over pairs of training
+      movements::
 
           D = D_coordinates + w_s · D_segments + w_v · D_velocity + w_d · D_duration
+              + w_t · D_torso
 
       ``D_velocity`` is the DTW cost of the bones' angular velocities
       (:func:`arm_velocities`: how fast and which way each bone turns, the rhythm that
       warping hides), ``D_duration`` the ratio of the durations ``|log(T_q / T_r)|``
       (:func:`duration_costs`: how long the movement lasts, which the length-normalised
-      DTW cost discards). The three weights are chosen in ``fit`` from ``term_weights``
-      (4³ = 64 candidates) by leave-one-group-out 1-NN accuracy on the training movements
-      (``groups`` given to ``fit``; else leave-one-out), the first best in the order
-      ``w_s``, ``w_v``, ``w_d`` ascending (the smaller weights on ties). Nothing of a
-      held-out group is used to choose them.
+      DTW cost discards), ``D_torso`` the DTW cost of the trunk's pose
+      (:func:`torso_pose`: how far the shoulders have moved since the first frame and how
+      the trunk leans, which tells a kick, a hop and a sneak, or a bend to the floor,
+      apart when the legs are not seen). The four weights are chosen in ``fit`` from
+      ``term_weights`` (4⁴ = 256 candidates; 4³ = 64 with ``torso=False``) by
+      leave-one-group-out 1-NN accuracy on the training movements (``groups`` given to
+      ``fit``; else leave-one-out), the first best in the order ``w_s``, ``w_v``, ``w_d``,
+      ``w_t`` ascending (the smaller weights on ties). Nothing of a held-out group is used
+      to choose them.
     * ``"histogram"``: :class:`PrimitiveHistogramClassifier` (nearest centroid of the
       primitive histograms).
 
@@ -766,8 +796,8 @@ class MotionClassifier(_NearestSequences):
     both arms, with the weights chosen by the inner leave-one-group-out of each fold; the
     figures and the commands reproducing them are in ``docs/evaluate.rst``. The per-frame
     path says *how* the arm moves, the segment sequence *which strokes in which order*,
-    the velocities *at what rhythm* and the duration *for how long*; the weights let each
-    corpus weigh them.
+    the velocities *at what rhythm*, the duration *for how long* and the torso *what the
+    body carrying the arms does*; the weights let each corpus weigh them.
 
     The defaults of the settings below are declared in
     :data:`visprim.params.CLASSIFIER_PARAMETERS`.
@@ -792,6 +822,12 @@ class MotionClassifier(_NearestSequences):
     term_weights : sequence of float
         Candidate weights of each further term of ``method="combined"`` (default
         0, 0.25, 0.5, 1).
+    torso : bool
+        ``method="combined"`` also sums the cost of the trunk's pose (default True; chosen
+        by the nested measurement in ``docs/evaluate.rst``). It needs the recordings'
+        shoulder centres in the recording frame (and their ``body_frame``, else the trunk
+        is taken as upright): movements whose arms are given in a shoulder frame carry no
+        trunk, their torso costs are all 0 and the weight changes nothing.
 
     Attributes
     ----------
@@ -802,7 +838,7 @@ class MotionClassifier(_NearestSequences):
     term_weights_ : dict — the chosen weight of each term (1 for the first).
     segment_weight_ : float — ``w_s`` of ``method="combined"``.
     inner_accuracy_ : dict — inner leave-one-group-out accuracy of each candidate
-        ``(w_s, w_v, w_d)``.
+        ``(w_s, w_v, w_d, w_t)`` (``(w_s, w_v, w_d)`` with ``torso=False``).
     classes_ : the labels seen in ``fit``.
     """
 
@@ -815,6 +851,7 @@ class MotionClassifier(_NearestSequences):
         n_neighbors: int = _DEFAULTS["n_neighbors"],
         step: int = _DEFAULTS["step"],
         term_weights: Sequence[float] = _DEFAULTS["term_weights"],
+        torso: bool = _DEFAULTS["torso"],
     ) -> None:
         self.model_params = model_params
         self.method = method
@@ -823,9 +860,12 @@ class MotionClassifier(_NearestSequences):
         self.n_neighbors = n_neighbors
         self.step = step
         self.term_weights = term_weights
+        self.torso = torso
 
     def _terms(self) -> tuple[str, ...]:
-        return COMBINED_TERMS if self.method == "combined" else (self.method,)
+        if self.method != "combined":
+            return (self.method,)
+        return COMBINED_TERMS + (("torso",) if self.torso else ())
 
     def _fit_features(self, trials: list[Trial]) -> None:
         for p in params.CLASSIFIER_PARAMETERS:
@@ -851,6 +891,8 @@ class MotionClassifier(_NearestSequences):
                 out[term] = [arm_velocities(t) for t in trials]
             elif term == "duration":
                 out[term] = trials
+            elif term == "torso":
+                out[term] = [torso_pose(t) for t in trials]
             else:
                 out[term] = self._segment_projections(trials)
         return out
@@ -906,7 +948,9 @@ class MotionClassifier(_NearestSequences):
             m = float(np.median(c[off])) if n > 1 else 0.0
             self.scales_[t] = m if m > 0 else 1.0
             train[t] = c / self.scales_[t]
-        grid = [tuple(float(w) for w in ws) for ws in product(self.term_weights, repeat=3)]
+        grid = [
+            tuple(float(w) for w in ws) for ws in product(self.term_weights, repeat=len(terms) - 1)
+        ]
         scores = []
         for ws in grid:
             d = train[terms[0]] + sum(w * train[t] for w, t in zip(ws, terms[1:], strict=True))

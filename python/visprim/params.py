@@ -457,6 +457,13 @@ CLASSIFIER_PARAMETERS: tuple[Parameter, ...] = (
         "candidate weights of each further DTW cost of method='combined'",
         None,
     ),
+    _P(
+        "torso",
+        True,
+        BOOLEAN,
+        "method='combined' also sums the DTW cost of the trunk's pose (torso_pose)",
+        None,
+    ),
 )
 
 
