@@ -41,6 +41,7 @@ from numpy.typing import NDArray
 from visprim.io.calibration import Camera, read_calibration
 from visprim.io.errors import GapError, ReadError
 from visprim.io.keypoints import read_error, trial_pieces_from_keypoints
+from visprim.io.refine import REFINE_CALIBRATION, refine_rotations
 from visprim.io.video_pose import PoseEstimator, VideoPoses, video_poses
 from visprim.params import (
     TRIANGULATION_MAX_REPROJECTION_PX,
@@ -527,6 +528,7 @@ def triangulate_poses(
     max_reprojection: float | None = TRIANGULATION_MAX_REPROJECTION_PX,
     views: Sequence[str] = (),
     sync: Sync = VIEWS_SYNC,
+    refine_calibration: bool = REFINE_CALIBRATION,
 ) -> MultiView:
     """Triangulate the poses of the views (one :class:`VideoPoses` per camera, in the
     cameras' order) over the frames every view has; ``swaps`` checks left/right exchanges
@@ -543,6 +545,13 @@ def triangulate_poses(
     fitted to the frame (:meth:`visprim.io.calibration.Camera.fitted_to`: the calibrated
     image scaled uniformly and centred, letterbox / pillarbox); ``meta["calibrated_sizes"]``
     and ``meta["frame_sizes"]`` record both; the result's ``cameras`` are the fitted ones.
+
+    ``refine_calibration`` (default :data:`visprim.io.refine.REFINE_CALIBRATION`): first fit
+    one small rotation per camera to the keypoints (self-calibration,
+    :func:`visprim.io.refine.refine_rotations`, after the left/right check), used only where
+    it lowers the reprojection cost on held-out frames; ``meta["refine_calibration"]``
+    records the rotations, whether they were applied and why; the result's ``cameras`` are
+    then the refined ones.
     """
     if len(poses) != len(cameras) or len(poses) < 2:
         raise ValueError(
@@ -562,6 +571,22 @@ def triangulate_poses(
     start, stop = _common_frames(poses, offsets)
     pixels, conf = _stack_views(poses, offsets, k, start, stop)
     n = stop - start
+    refined = None
+    if refine_calibration:
+        first = triangulate_keypoints(
+            cameras,
+            pixels,
+            conf,
+            min_confidence=min_confidence,
+            min_views=min_views,
+            pairs=pairs,
+            max_reprojection=None,
+        )
+        ref = refine_rotations(
+            cameras, first.pixels, first.confidence, min_confidence=min_confidence
+        )
+        cameras = ref.cameras
+        refined = ref.record()
     tri = triangulate_keypoints(
         cameras,
         pixels,
@@ -591,6 +616,7 @@ def triangulate_poses(
         "max_reprojection_px": max_reprojection,
         "side_swaps_per_view": [int(x) for x in tri.swapped.sum(axis=0)],
         "rejected_per_view": [int(x) for x in tri.rejected.sum(axis=(0, 1))],
+        "refine_calibration": refined,
         "estimator": poses[0].meta.get("estimator"),
         "times_from": poses[0].meta.get("times_from"),
         "rate": poses[0].meta.get("rate"),
@@ -623,9 +649,11 @@ def triangulate_views(
     max_frames: int | None = None,
     cache: bool = True,
     sync: Sync = VIEWS_SYNC,
+    refine_calibration: bool = REFINE_CALIBRATION,
 ) -> MultiView:
     """Pose of every view, triangulated (see the module docstring,
-    :func:`triangulate_poses` for ``sync`` and :func:`triangulate_keypoints`)."""
+    :func:`triangulate_poses` for ``sync`` and ``refine_calibration``, and
+    :func:`triangulate_keypoints`)."""
     paths = [Path(v) for v in videos]
     if len(paths) < 2:
         raise ValueError(f"read_views needs at least 2 videos, got {len(paths)}")
@@ -645,6 +673,7 @@ def triangulate_views(
         max_reprojection=max_reprojection,
         views=[str(p) for p in paths],
         sync=sync,
+        refine_calibration=refine_calibration,
     )
 
 
@@ -667,13 +696,17 @@ def read_views_pieces(
     max_reprojection: float | None = TRIANGULATION_MAX_REPROJECTION_PX,
     lowpass_hz: float | None = VIDEO_LOWPASS_HZ,
     sync: Sync = VIEWS_SYNC,
+    refine_calibration: bool = REFINE_CALIBRATION,
 ) -> list[Trial]:
     """Trials from several calibrated views (several when long gaps split them).
 
     ``calibration``: a Qualisys ``.qca.txt`` or Pose2Sim/OpenCV ``.toml`` file, or cameras;
     ``swaps``, ``max_reprojection`` (px): see :func:`triangulate_keypoints`; ``sync``: the
     views' time alignment (default :data:`visprim.params.VIEWS_SYNC`: frame-synchronised;
-    True estimates whole-frame offsets; see :func:`triangulate_poses`); ``lowpass_hz``:
+    True estimates whole-frame offsets; see :func:`triangulate_poses`);
+    ``refine_calibration``: fit a small rotation per camera to the keypoints, kept only where
+    it passes a held-out check (default :data:`visprim.io.refine.REFINE_CALIBRATION`; see
+    :func:`triangulate_poses`); ``lowpass_hz``:
     smoothing of the 3-D keypoints (default :data:`visprim.params.VIDEO_LOWPASS_HZ`); the
     other options as :func:`visprim.io.read_pieces`.
     """
@@ -688,6 +721,7 @@ def read_views_pieces(
         max_frames=max_frames,
         cache=cache,
         sync=sync,
+        refine_calibration=refine_calibration,
     )
     first = Path(videos[0])
     try:
