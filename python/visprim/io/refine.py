@@ -65,7 +65,7 @@ __all__ = [
 
 #: Default of ``read_views(..., refine_calibration=)`` (see ``docs/video.rst`` for the
 #: measurement that set it).
-REFINE_CALIBRATION = False
+REFINE_CALIBRATION = True
 #: Scale (px) of the soft-L1 loss: residuals below it count squared, above it about linearly.
 #: Of the order of a pose estimator's keypoint error at 1080p (a few px).
 REFINE_LOSS_SCALE_PX = 5.0
