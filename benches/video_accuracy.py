@@ -388,6 +388,15 @@ def report(folder: Path, variants: bool = False) -> tuple[str, dict[str, float]]
             f"{100 * sum(robust.meta['rejected_per_view']) / used0:.1f} % of all; points with no "
             f"consistent views: {100 * np.isnan(robust.points[..., 0]).mean():.1f} %"
         )
+        loose_whole = triangulate_poses(poses, whole.cameras, max_reprojection=None, **AS_READ)
+        used1 = np.isfinite(loose_whole.reprojection).sum()
+        print(
+            "self-calibrated (default): left/right exchanges "
+            f"{whole.meta['side_swaps_per_view']}; observations left out as outliers: "
+            f"{whole.meta['rejected_per_view']} per view, "
+            f"{100 * sum(whole.meta['rejected_per_view']) / used1:.1f} % of all; points with "
+            f"no consistent views: {100 * np.isnan(whole.points[..., 0]).mean():.1f} %"
+        )
         figures = {
             "calibration as read: used median (px)": float(np.nanmedian(robust.reprojection)),
             "calibration as read: all views median (px)": float(
@@ -803,12 +812,15 @@ def self_calibration(
     cf_points = np.full_like(robust.points, np.nan)
     rot_cf = np.zeros((len(views), n, 3, 3))
     alle: dict[str, list[Array]] = {"QCA": [], "refined": []}
+    rotations = []
+    names = [v.stem for v in views]
     for fit_on, score_on in ((0, 1), (1, 0)):
         a, b = halves[fit_on]
         fit_poses = [window(q, a, b) for q in poses]
         loose_fit = triangulate_poses(fit_poses, cameras, max_reprojection=None, **AS_READ)
         ref = refine_rotations(loose_fit.cameras, loose_fit.pixels, loose_fit.confidence)
         cams_r = rotated(loose_fit.cameras, np.deg2rad(ref.rotation_deg))
+        rotations.append(ref.rotation_deg)
         angles = ", ".join(f"{x:.2f}" for x in np.linalg.norm(ref.rotation_deg, axis=1))
         c, d = halves[score_on]
         sc_poses = [window(q, c, d) for q in poses]
@@ -824,6 +836,14 @@ def self_calibration(
                 cf_points[c:d] = rob.points
                 for vi, cam in enumerate(rob.cameras):
                     rot_cf[vi, c:d] = cam.R
+    print(
+        "\nrotation vectors (°, camera axes x tilt, y pan, z roll) per fold: "
+        + "; ".join(
+            f"fitted on {halves[f][0]}–{halves[f][1] - 1}: "
+            + ", ".join(f"{names[vi]} {np.round(r, 2).tolist()}" for vi, r in enumerate(rv))
+            for f, rv in enumerate(rotations)
+        )
+    )
     for label, parts in alle.items():
         e = np.concatenate(parts)
         figures[f"cross-fitted halves, {label}: all views median (px)"] = float(np.nanmedian(e))
