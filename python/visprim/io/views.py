@@ -14,7 +14,10 @@
    needs ``min_views`` views. Two robust steps (:func:`triangulate_keypoints`): a view whose
    estimator exchanged left and right (common when the person faces away from it) is put
    back per frame and per left/right pair, by reprojection; then outlier observations
-   (reprojection above ``max_reprojection`` px) are left out, worst first.
+   (reprojection above ``max_reprojection`` px) are left out, worst first. Before that, by
+   default, each camera's rotation is refined from the keypoints (self-calibration,
+   :mod:`visprim.io.refine`; kept only where it lowers the reprojection cost on held-out
+   frames; ``refine_calibration=False`` turns it off).
 4. The 3-D keypoints (world frame of the calibration: Qualisys, metres, +z up) become the trial
    as any keypoints do (:func:`visprim.io.keypoints.trial_pieces_from_keypoints`); points seen
    by too few views are gaps (short ones filled, long ones split or refused).
