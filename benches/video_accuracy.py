@@ -15,7 +15,8 @@ set, load average; the machine is shared):
    (``refine_calibration=True``, in-sample). The same per keypoint group (all 33, the
    trial's 12, face, arms, hands, hips, legs). A table over outlier thresholds shows how
    much the "used" figure is the threshold's doing. Every table uses the calibration as read
-   (no self-calibration) unless it says otherwise.
+   (no self-calibration) unless it says otherwise; the line after the table says what
+   read_views' default (``"auto"``) does on this clip.
    Synchronisation: ``sync=True``'s offsets (:func:`visprim.io.views.estimate_offsets`),
    per pair of views and combined, their inconsistency, the reprojection error with them,
    and an independent check: each single camera against the reference built with and
@@ -353,8 +354,9 @@ def report(folder: Path, variants: bool = False) -> tuple[str, dict[str, float]]
         swapped = triangulate_poses(poses, cameras, swaps=True, max_reprojection=None, **AS_READ)
         robust = triangulate_poses(poses, cameras, **AS_READ)  # read_views without refinement
         t0 = time.perf_counter()
-        whole = triangulate_poses(poses, cameras)  # the default of read_views
+        whole = triangulate_poses(poses, cameras, refine_calibration=True)
         took = time.perf_counter() - t0
+        default = triangulate_poses(poses, cameras)  # read_views' default, "auto"
         fitted = robust.cameras  # each camera fitted to its video's frame size
         print(
             "\n## four-view triangulation: reprojection error (px), all 33 keypoints\n\n"
@@ -377,7 +379,7 @@ def report(folder: Path, variants: bool = False) -> tuple[str, dict[str, float]]
         ):
             print(row)
         for row in reprojection_rows(
-            whole, "+ self-calibration (default; in-sample: fitted on these frames)"
+            whole, "+ self-calibration (refine_calibration=True; in-sample: fitted on these frames)"
         ):
             print(row)
         used0 = np.isfinite(swapped.reprojection).sum()
@@ -391,21 +393,27 @@ def report(folder: Path, variants: bool = False) -> tuple[str, dict[str, float]]
         loose_whole = triangulate_poses(poses, whole.cameras, max_reprojection=None, **AS_READ)
         used1 = np.isfinite(loose_whole.reprojection).sum()
         print(
-            "self-calibrated (default): left/right exchanges "
+            "self-calibrated (refine_calibration=True): left/right exchanges "
             f"{whole.meta['side_swaps_per_view']}; observations left out as outliers: "
             f"{whole.meta['rejected_per_view']} per view, "
             f"{100 * sum(whole.meta['rejected_per_view']) / used1:.1f} % of all; points with "
             f"no consistent views: {100 * np.isnan(whole.points[..., 0]).mean():.1f} %"
+        )
+        rec0 = default.meta["refine_calibration"] or {}
+        print(
+            "read_views' default (refine_calibration='auto') on this clip: applied "
+            f"{rec0.get('applied')}: {rec0.get('reason')}; people found per view: "
+            f"{[q.meta.get('people') for q in poses]}"
         )
         figures = {
             "calibration as read: used median (px)": float(np.nanmedian(robust.reprojection)),
             "calibration as read: all views median (px)": float(
                 np.nanmedian(all_views_error(robust))
             ),
-            "default, self-calibrated (in-sample): used median (px)": float(
+            "self-calibrated (True, in-sample): used median (px)": float(
                 np.nanmedian(whole.reprojection)
             ),
-            "default, self-calibrated (in-sample): all views median (px)": float(
+            "self-calibrated (True, in-sample): all views median (px)": float(
                 np.nanmedian(all_views_error(whole))
             ),
             "all views, no outlier rejection, median (px)": float(
@@ -414,7 +422,8 @@ def report(folder: Path, variants: bool = False) -> tuple[str, dict[str, float]]
         }
 
         print(
-            "\n### by keypoint group (the default pipeline; median, px)\n\n"
+            "\n### by keypoint group (calibration as read, outliers > 15 px left out; "
+            "median, px)\n\n"
             "The target is over all 33 keypoints; the trial is built from 12 of them "
             "(visprim.io.keypoints.LAYOUTS['blazepose33'])."
         )
@@ -889,12 +898,13 @@ def self_calibration(
     loose_w = triangulate_poses(poses, whole.cameras, max_reprojection=None, **AS_READ)
     rec = whole.meta["refine_calibration"]
     print(
-        "\nread_views' default (refine_calibration=True) on the whole clip (in-sample: fitted and "
+        "\nread_views(..., refine_calibration=True) on the whole clip (in-sample: fitted and "
         f"scored on the same frames): applied: {rec['applied']} ({rec['reason']}); rotation "
         f"per camera {rec['rotation_angle_deg']} °; its held-out check (cost per observation, "
         f"px², before → after): "
         + "; ".join(
             f"fitted on half {c['fitted_on_half']}: {c['cost_before']:.1f} → {c['cost_after']:.1f}"
+            f" (consistent observations {c['consistent_before']} → {c['consistent_after']})"
             for c in rec["held_out"]
         )
         + f"; triangulation with it {took:.1f} s wall-clock (shared machine). Reprojection "

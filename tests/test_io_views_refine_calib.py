@@ -15,6 +15,7 @@ of the 1° error put in.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from _keypoint_data import ring_cameras
 from visprim.io.calibration import Camera, rodrigues
 from visprim.io.refine import refine_rotations, robust_cost, rotated
@@ -145,3 +146,60 @@ def test_rotated_keeps_the_centre():
     r = rotated([c], np.array([[0.01, -0.02, 0.03]]))[0]
     np.testing.assert_allclose(r.centre, c.centre, atol=1e-12)
     np.testing.assert_allclose(r.R, rodrigues(np.array([0.01, -0.02, 0.03])) @ c.R)
+
+
+def _poses(pix: np.ndarray, conf: np.ndarray, cams: list[Camera], people: list[int]):
+    t = pix.shape[0]
+    return [
+        VideoPoses(
+            times=np.arange(t) / RATE,
+            world=np.zeros(pix.shape[:2] + (3,)),
+            image=pix[:, :, v],
+            confidence=conf[:, :, v],
+            found=np.ones(t, dtype=bool),
+            size=cams[v].size,
+            meta={"layout": "blazepose33", "rate": RATE, "people": people[v]},
+        )
+        for v in range(len(cams))
+    ]
+
+
+def test_someone_behind_in_one_view_is_not_seen_by_the_check_so_auto_skips_crowded_views():
+    """Documented limitation (visprim.io.refine): view 3 follows a person 0.3 m behind the
+    subject along x (mostly in depth for that camera). Every camera turning by 1–2° explains
+    it nearly as well, so the held-out check passes and the points move by centimetres, while
+    the calibration as given, with the outlier rule, has them within a centimetre. Hence
+    ``"auto"`` does not refine when a view found several people."""
+    true = _cameras()
+    rng = np.random.default_rng(0)
+    truth = rng.uniform([-0.3, -0.3, 0.2], [0.3, 0.3, 1.8], (100, 33, 3))
+    behind = truth + np.array([0.3, 0.0, 0.0])
+    pix = np.stack([c.project(behind if v == 2 else truth) for v, c in enumerate(true)], axis=2)
+    pix += rng.normal(0.0, NOISE_PX, pix.shape)
+    conf = np.ones(pix.shape[:3])
+    forced = refine_rotations(true, pix, conf)
+    assert forced.applied  # the check cannot see it
+    err = {
+        name: float(
+            np.nanmedian(
+                np.linalg.norm(triangulate_keypoints(c, pix, conf).points - truth, axis=-1)
+            )
+        )
+        for name, c in (("as given", true), ("refined", forced.cameras))
+    }
+    assert err["as given"] < 0.01 and err["refined"] > 0.04, err
+    poses = _poses(pix, conf, true, [1, 1, 2, 1])
+    auto = triangulate_poses(poses, true)
+    rec = auto.meta["refine_calibration"]
+    assert not rec["applied"] and "several people" in rec["reason"] and "cam03" in rec["reason"]
+    assert auto.cameras == true
+    assert triangulate_poses(poses, true, refine_calibration=True).meta["refine_calibration"][
+        "applied"
+    ]
+
+
+def test_refine_calibration_values_are_checked():
+    true = _cameras()
+    _, pix, conf = _observe(true, 8, seed=4)
+    with pytest.raises(ValueError, match="refine_calibration"):
+        triangulate_poses(_poses(pix, conf, true, [1] * 4), true, refine_calibration="yes")

@@ -16,8 +16,8 @@
    back per frame and per left/right pair, by reprojection; then outlier observations
    (reprojection above ``max_reprojection`` px) are left out, worst first. Before that, by
    default, each camera's rotation is refined from the keypoints (self-calibration,
-   :mod:`visprim.io.refine`; kept only where it lowers the reprojection cost on held-out
-   frames; ``refine_calibration=False`` turns it off).
+   :mod:`visprim.io.refine`; kept only where it passes a held-out check; not where a view
+   found several people; ``refine_calibration=True / False`` always / never).
 4. The 3-D keypoints (world frame of the calibration: Qualisys, metres, +z up) become the trial
    as any keypoints do (:func:`visprim.io.keypoints.trial_pieces_from_keypoints`); points seen
    by too few views are gaps (short ones filled, long ones split or refused).
@@ -521,6 +521,14 @@ def _offsets(
     return [o - offs[0] for o in offs], None
 
 
+def _people(q: VideoPoses) -> int:
+    """How many people the estimator found in a view (1 when it does not say)."""
+    try:
+        return int(q.meta.get("people") or 1)
+    except (TypeError, ValueError):
+        return 1
+
+
 def triangulate_poses(
     poses: Sequence[VideoPoses],
     cameras: Sequence[Camera],
@@ -531,7 +539,7 @@ def triangulate_poses(
     max_reprojection: float | None = TRIANGULATION_MAX_REPROJECTION_PX,
     views: Sequence[str] = (),
     sync: Sync = VIEWS_SYNC,
-    refine_calibration: bool = REFINE_CALIBRATION,
+    refine_calibration: bool | str = REFINE_CALIBRATION,
 ) -> MultiView:
     """Triangulate the poses of the views (one :class:`VideoPoses` per camera, in the
     cameras' order) over the frames every view has; ``swaps`` checks left/right exchanges
@@ -549,10 +557,11 @@ def triangulate_poses(
     image scaled uniformly and centred, letterbox / pillarbox); ``meta["calibrated_sizes"]``
     and ``meta["frame_sizes"]`` record both; the result's ``cameras`` are the fitted ones.
 
-    ``refine_calibration`` (default :data:`visprim.io.refine.REFINE_CALIBRATION`): first fit
-    one small rotation per camera to the keypoints (self-calibration,
+    ``refine_calibration`` (default :data:`visprim.io.refine.REFINE_CALIBRATION`, ``"auto"``):
+    first fit one small rotation per camera to the keypoints (self-calibration,
     :func:`visprim.io.refine.refine_rotations`, after the left/right check), used only where
-    it lowers the reprojection cost on held-out frames; ``meta["refine_calibration"]``
+    it passes a held-out check; ``"auto"`` does so unless a view found several people
+    (``meta["people"]`` of its poses), True always, False never. ``meta["refine_calibration"]``
     records the rotations, whether they were applied and why; the result's ``cameras`` are
     then the refined ones.
     """
@@ -575,7 +584,22 @@ def triangulate_poses(
     pixels, conf = _stack_views(poses, offsets, k, start, stop)
     n = stop - start
     refined = None
-    if refine_calibration:
+    if refine_calibration == "auto":
+        crowded = [c.name for c, q in zip(cameras, poses, strict=True) if _people(q) > 1]
+        if crowded:
+            refined = {
+                "applied": False,
+                "reason": (
+                    f"auto: several people in view ({', '.join(crowded)}); the views may "
+                    "follow different people, which the held-out check cannot tell from a "
+                    "calibration error (refine_calibration=True refines anyway)"
+                ),
+            }
+    elif not isinstance(refine_calibration, bool):
+        raise ValueError(
+            f"refine_calibration must be True, False or 'auto', got {refine_calibration!r}"
+        )
+    if refine_calibration is True or (refine_calibration == "auto" and refined is None):
         first = triangulate_keypoints(
             cameras,
             pixels,
@@ -652,7 +676,7 @@ def triangulate_views(
     max_frames: int | None = None,
     cache: bool = True,
     sync: Sync = VIEWS_SYNC,
-    refine_calibration: bool = REFINE_CALIBRATION,
+    refine_calibration: bool | str = REFINE_CALIBRATION,
 ) -> MultiView:
     """Pose of every view, triangulated (see the module docstring,
     :func:`triangulate_poses` for ``sync`` and ``refine_calibration``, and
@@ -699,7 +723,7 @@ def read_views_pieces(
     max_reprojection: float | None = TRIANGULATION_MAX_REPROJECTION_PX,
     lowpass_hz: float | None = VIDEO_LOWPASS_HZ,
     sync: Sync = VIEWS_SYNC,
-    refine_calibration: bool = REFINE_CALIBRATION,
+    refine_calibration: bool | str = REFINE_CALIBRATION,
 ) -> list[Trial]:
     """Trials from several calibrated views (several when long gaps split them).
 
@@ -708,8 +732,9 @@ def read_views_pieces(
     views' time alignment (default :data:`visprim.params.VIEWS_SYNC`: frame-synchronised;
     True estimates whole-frame offsets; see :func:`triangulate_poses`);
     ``refine_calibration``: fit a small rotation per camera to the keypoints, kept only where
-    it passes a held-out check (default :data:`visprim.io.refine.REFINE_CALIBRATION`; see
-    :func:`triangulate_poses`); ``lowpass_hz``:
+    it passes a held-out check (default :data:`visprim.io.refine.REFINE_CALIBRATION`,
+    ``"auto"``: not where a view found several people; see :func:`triangulate_poses`);
+    ``lowpass_hz``:
     smoothing of the 3-D keypoints (default :data:`visprim.params.VIDEO_LOWPASS_HZ`); the
     other options as :func:`visprim.io.read_pieces`.
     """
