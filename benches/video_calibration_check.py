@@ -32,6 +32,9 @@ Prints (``--out``: writes atomically) stamped tables:
    MediaPipe's (the other estimator): principal-point shifts (8 parameters), focal scale (4),
    roll about the optical axis (4), rotation (12). A correction that helps the other estimator
    is a property of the cameras, not of one estimator's keypoints.
+4. **Self-calibration the other way round.** ``read_views``' ``refine_calibration``
+   (:func:`visprim.io.refine.refine_rotations`) fitted on MediaPipe's keypoints, scored on
+   OpenPose's.
 """
 
 from __future__ import annotations
@@ -53,6 +56,7 @@ from numpy.typing import NDArray
 from visprim import kernels
 from visprim.atomic import write_text
 from visprim.io.calibration import Camera, read_qca, read_toml, rodrigues
+from visprim.io.refine import refine_rotations
 from visprim.io.video_pose import video_poses
 from visprim.io.views import SIDE_PAIRS, triangulate_keypoints
 
@@ -286,6 +290,32 @@ def report(git_dir: Path, folder: Path) -> str:
             r = row(f"{kind} ({npar})", corrected(fitted, x, kind), data)
             unit = "px" if kind == "principal point" else ("%" if kind == "focal scale" else "°")
             print(r.replace(" | ", f" | {shown} {unit} | ", 1))
+        mp_swapfix = triangulate_keypoints(
+            fitted,
+            mp_pix,
+            mp_conf,
+            min_confidence=MP_MIN_CONF,
+            pairs=SIDE_PAIRS["blazepose33"],
+            max_reprojection=None,
+        )
+        ref = refine_rotations(fitted, mp_swapfix.pixels, mp_swapfix.confidence)
+        print(
+            "\n## 4. self-calibration fitted on MediaPipe (read_views(..., "
+            "refine_calibration=True), visprim.io.refine), scored on OpenPose (the held-out "
+            "estimator)\n"
+        )
+        print(
+            "| calibration | rotation per camera (°) | OpenPose: none | OpenPose: used | "
+            "OpenPose: all views | MediaPipe: none | MediaPipe: used | MediaPipe: all views |"
+        )
+        print("|---|---|---|---|---|---|---|---|")
+        angles = np.round(np.linalg.norm(ref.rotation_deg, axis=1), 2).tolist()
+        print(row("QCA fitted (as read)", fitted, data).replace(" | ", " | — | ", 1))
+        print(
+            row(f"refined (applied: {ref.applied})", ref.cameras, data).replace(
+                " | ", f" | {angles} | ", 1
+            )
+        )
         print(f"\nload average at the end {' / '.join(f'{x:.1f}' for x in os.getloadavg())}")
     return buf.getvalue()
 

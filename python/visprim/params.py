@@ -576,6 +576,13 @@ VIEWS_SYNC: bool = False
 #: The largest offset (s) ``sync=True`` searches, either way (at 60 fps, 12 frames).
 VIEWS_SYNC_MAX_OFFSET_S: float = 0.2
 
+#: Self-calibration of the cameras (``refine_calibration`` of :func:`visprim.io.read_views`,
+#: :mod:`visprim.io.refine`): ``"auto"`` refines unless a view
+#: found several people (the views may then follow different people, which the held-out
+#: check cannot tell from a calibration error); True always tries, False never (see
+#: ``docs/video.rst`` for the measurements that set it).
+VIEWS_REFINE_CALIBRATION: bool | str = "auto"
+
 #: Zero-phase low-pass cutoff (Hz) of video keypoints before they become a trial
 #: (``lowpass_hz`` of :func:`visprim.io.keypoints.trial_pieces_from_keypoints`; None: no
 #: smoothing). Chosen by ``benches/video_accuracy.py`` (single camera against the four-view

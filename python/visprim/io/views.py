@@ -14,7 +14,10 @@
    needs ``min_views`` views. Two robust steps (:func:`triangulate_keypoints`): a view whose
    estimator exchanged left and right (common when the person faces away from it) is put
    back per frame and per left/right pair, by reprojection; then outlier observations
-   (reprojection above ``max_reprojection`` px) are left out, worst first.
+   (reprojection above ``max_reprojection`` px) are left out, worst first. Before that, by
+   default, each camera's rotation is refined from the keypoints (self-calibration,
+   :mod:`visprim.io.refine`; kept only where it passes a held-out check; not where a view
+   found several people; ``refine_calibration=True / False`` always / never).
 4. The 3-D keypoints (world frame of the calibration: Qualisys, metres, +z up) become the trial
    as any keypoints do (:func:`visprim.io.keypoints.trial_pieces_from_keypoints`); points seen
    by too few views are gaps (short ones filled, long ones split or refused).
@@ -41,10 +44,12 @@ from numpy.typing import NDArray
 from visprim.io.calibration import Camera, read_calibration
 from visprim.io.errors import GapError, ReadError
 from visprim.io.keypoints import read_error, trial_pieces_from_keypoints
+from visprim.io.refine import refine_rotations
 from visprim.io.video_pose import PoseEstimator, VideoPoses, video_poses
 from visprim.params import (
     TRIANGULATION_MAX_REPROJECTION_PX,
     VIDEO_LOWPASS_HZ,
+    VIEWS_REFINE_CALIBRATION,
     VIEWS_SYNC,
     VIEWS_SYNC_MAX_OFFSET_S,
 )
@@ -517,6 +522,14 @@ def _offsets(
     return [o - offs[0] for o in offs], None
 
 
+def _people(q: VideoPoses) -> int:
+    """How many people the estimator found in a view (1 when it does not say)."""
+    try:
+        return int(q.meta.get("people") or 1)
+    except (TypeError, ValueError):
+        return 1
+
+
 def triangulate_poses(
     poses: Sequence[VideoPoses],
     cameras: Sequence[Camera],
@@ -527,6 +540,7 @@ def triangulate_poses(
     max_reprojection: float | None = TRIANGULATION_MAX_REPROJECTION_PX,
     views: Sequence[str] = (),
     sync: Sync = VIEWS_SYNC,
+    refine_calibration: bool | str = VIEWS_REFINE_CALIBRATION,
 ) -> MultiView:
     """Triangulate the poses of the views (one :class:`VideoPoses` per camera, in the
     cameras' order) over the frames every view has; ``swaps`` checks left/right exchanges
@@ -543,6 +557,14 @@ def triangulate_poses(
     fitted to the frame (:meth:`visprim.io.calibration.Camera.fitted_to`: the calibrated
     image scaled uniformly and centred, letterbox / pillarbox); ``meta["calibrated_sizes"]``
     and ``meta["frame_sizes"]`` record both; the result's ``cameras`` are the fitted ones.
+
+    ``refine_calibration`` (default :data:`visprim.params.VIEWS_REFINE_CALIBRATION`, ``"auto"``):
+    first fit one small rotation per camera to the keypoints (self-calibration,
+    :func:`visprim.io.refine.refine_rotations`, after the left/right check), used only where
+    it passes a held-out check; ``"auto"`` does so unless a view found several people
+    (``meta["people"]`` of its poses), True always, False never. ``meta["refine_calibration"]``
+    records the rotations, whether they were applied and why; the result's ``cameras`` are
+    then the refined ones.
     """
     if len(poses) != len(cameras) or len(poses) < 2:
         raise ValueError(
@@ -562,6 +584,37 @@ def triangulate_poses(
     start, stop = _common_frames(poses, offsets)
     pixels, conf = _stack_views(poses, offsets, k, start, stop)
     n = stop - start
+    refined = None
+    if refine_calibration == "auto":
+        crowded = [c.name for c, q in zip(cameras, poses, strict=True) if _people(q) > 1]
+        if crowded:
+            refined = {
+                "applied": False,
+                "reason": (
+                    f"auto: several people in view ({', '.join(crowded)}); the views may "
+                    "follow different people, which the held-out check cannot tell from a "
+                    "calibration error (refine_calibration=True refines anyway)"
+                ),
+            }
+    elif not isinstance(refine_calibration, bool):
+        raise ValueError(
+            f"refine_calibration must be True, False or 'auto', got {refine_calibration!r}"
+        )
+    if refine_calibration is True or (refine_calibration == "auto" and refined is None):
+        first = triangulate_keypoints(
+            cameras,
+            pixels,
+            conf,
+            min_confidence=min_confidence,
+            min_views=min_views,
+            pairs=pairs,
+            max_reprojection=None,
+        )
+        ref = refine_rotations(
+            cameras, first.pixels, first.confidence, min_confidence=min_confidence
+        )
+        cameras = ref.cameras
+        refined = ref.record()
     tri = triangulate_keypoints(
         cameras,
         pixels,
@@ -591,6 +644,7 @@ def triangulate_poses(
         "max_reprojection_px": max_reprojection,
         "side_swaps_per_view": [int(x) for x in tri.swapped.sum(axis=0)],
         "rejected_per_view": [int(x) for x in tri.rejected.sum(axis=(0, 1))],
+        "refine_calibration": refined,
         "estimator": poses[0].meta.get("estimator"),
         "times_from": poses[0].meta.get("times_from"),
         "rate": poses[0].meta.get("rate"),
@@ -623,9 +677,11 @@ def triangulate_views(
     max_frames: int | None = None,
     cache: bool = True,
     sync: Sync = VIEWS_SYNC,
+    refine_calibration: bool | str = VIEWS_REFINE_CALIBRATION,
 ) -> MultiView:
     """Pose of every view, triangulated (see the module docstring,
-    :func:`triangulate_poses` for ``sync`` and :func:`triangulate_keypoints`)."""
+    :func:`triangulate_poses` for ``sync`` and ``refine_calibration``, and
+    :func:`triangulate_keypoints`)."""
     paths = [Path(v) for v in videos]
     if len(paths) < 2:
         raise ValueError(f"read_views needs at least 2 videos, got {len(paths)}")
@@ -645,6 +701,7 @@ def triangulate_views(
         max_reprojection=max_reprojection,
         views=[str(p) for p in paths],
         sync=sync,
+        refine_calibration=refine_calibration,
     )
 
 
@@ -667,13 +724,18 @@ def read_views_pieces(
     max_reprojection: float | None = TRIANGULATION_MAX_REPROJECTION_PX,
     lowpass_hz: float | None = VIDEO_LOWPASS_HZ,
     sync: Sync = VIEWS_SYNC,
+    refine_calibration: bool | str = VIEWS_REFINE_CALIBRATION,
 ) -> list[Trial]:
     """Trials from several calibrated views (several when long gaps split them).
 
     ``calibration``: a Qualisys ``.qca.txt`` or Pose2Sim/OpenCV ``.toml`` file, or cameras;
     ``swaps``, ``max_reprojection`` (px): see :func:`triangulate_keypoints`; ``sync``: the
     views' time alignment (default :data:`visprim.params.VIEWS_SYNC`: frame-synchronised;
-    True estimates whole-frame offsets; see :func:`triangulate_poses`); ``lowpass_hz``:
+    True estimates whole-frame offsets; see :func:`triangulate_poses`);
+    ``refine_calibration``: fit a small rotation per camera to the keypoints, kept only where
+    it passes a held-out check (default :data:`visprim.params.VIEWS_REFINE_CALIBRATION`,
+    ``"auto"``: not where a view found several people; see :func:`triangulate_poses`);
+    ``lowpass_hz``:
     smoothing of the 3-D keypoints (default :data:`visprim.params.VIDEO_LOWPASS_HZ`); the
     other options as :func:`visprim.io.read_pieces`.
     """
@@ -688,6 +750,7 @@ def read_views_pieces(
         max_frames=max_frames,
         cache=cache,
         sync=sync,
+        refine_calibration=refine_calibration,
     )
     first = Path(videos[0])
     try:
