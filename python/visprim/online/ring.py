@@ -55,6 +55,9 @@ class FrameRing:
         """Frames ``[a, b)`` (absolute indices) as a new ``(b - a, channels)`` array."""
         if not self.start <= a <= b <= self.end:
             raise IndexError(f"frames [{a}, {b}) are not held (held: [{self.start}, {self.end}))")
+        i = a % self.capacity
+        if i + (b - a) <= self.capacity:  # not wrapped: one slice
+            return self._data[i : i + (b - a)].copy()
         idx = np.arange(a, b) % self.capacity
         return self._data[idx]
 

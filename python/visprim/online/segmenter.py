@@ -688,7 +688,9 @@ class OnlineSegmenter:
         )
         c = values.shape[1]
         if self._mean_offsets:
-            shift = vectors.reshape(1, c, n).mean(axis=2)
+            # numpy's mean (ndarray.mean: the sum, then divided by the count), without its
+            # Python wrapper.
+            shift = np.add.reduce(vectors.reshape(1, c, n), axis=2) / n
         else:
             shift = turn_offsets(vectors, n, self._vector_periodic)
         if np.any(shift):
