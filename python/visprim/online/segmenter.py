@@ -49,7 +49,8 @@ Each closed segment is resampled like a training segment
 (:meth:`~visprim.model.PrimitiveModel.assign`). With ``segment_filter="zero_phase"``
 (default) the segment's values are not the causal filter's: its raw angles, from
 ``_LEAD`` frames before its start to the frame that decided its end, go through the model's
-own zero-phase filter (:func:`visprim.filtering.lowpass`, the offline order), as offline.
+own zero-phase filter (:func:`visprim.filtering.lowpass`, the offline order), as offline
+(filter and channels in one Rust call, :func:`visprim.kernels.segment_channels`).
 This look-ahead costs no latency (those frames have arrived when the segment closes) and
 gives the segment the offline shape (the causal order-2 filter lags and smooths less);
 ``"causal"`` uses the causally filtered values.
