@@ -166,3 +166,74 @@ def test_the_running_class_refuses_codes_of_another_length() -> None:
         dtw.running(np.array([0, 1, 2], dtype=np.int64))
     with pytest.raises(TypeError):
         dtw.running(np.array([0.0, 1.0]))
+
+
+@pytest.mark.parametrize("features", ["zyz", "directions"])
+@pytest.mark.parametrize("n_arms", [1, 2])
+def test_segment_channels_are_lowpass_then_from_angles(features: str, n_arms: int) -> None:
+    """The closed segment's values in one Rust call against the numpy path they replace:
+    the model's zero-phase filter of the window (``short="reduce"`` for short windows) then
+    ``from_angles`` of the kept frames; the filter's bits, the channels within an ulp."""
+    from visprim.filtering import butterworth
+
+    rng = np.random.default_rng(5)
+    for order, cutoff in [(10, 0.2), (2, 0.35)]:
+        sos = butterworth(order, cutoff)
+        for n in [1, 3, 12, 31, 32, 33, 120]:
+            raw = np.cumsum(rng.normal(scale=0.1, size=(n, 4 * n_arms)), axis=0)
+            start, stop = n // 4, n - n // 5
+            want = from_angles(
+                lowpass(raw, order=order, cutoff=cutoff, short="reduce")[start:stop], features
+            )
+            got = kernels.segment_channels(sos, raw, start, stop, features)
+            assert got.shape == want.shape
+            if features == "zyz":
+                np.testing.assert_array_equal(got, want)
+            else:
+                np.testing.assert_allclose(got, want, rtol=0, atol=1e-15)
+
+
+def test_segment_channels_refuses_bad_windows() -> None:
+    from visprim.filtering import butterworth
+
+    sos = butterworth(2, 0.3)
+    raw = np.zeros((10, 4))
+    for start, stop in [(3, 3), (4, 2), (0, 11)]:
+        with pytest.raises(ValueError):
+            kernels.segment_channels(sos, raw, start, stop, "zyz")
+    with pytest.raises(ValueError):
+        kernels.segment_channels(sos, np.zeros((10, 3)), 0, 5, "zyz")
+    with pytest.raises(ValueError):
+        kernels.segment_channels(sos, raw, 0, 5, "quaternions")
+    bad = raw.copy()
+    bad[2, 1] = np.nan
+    with pytest.raises(ValueError):
+        kernels.segment_channels(sos, bad, 0, 5, "zyz")
+
+
+@pytest.mark.parametrize("offsets", ["mean", "turns"])
+def test_a_closed_segments_vector_is_vectors_from_frames(trials: list[Trial], offsets: str) -> None:
+    """The segmenter's shortcut to a segment vector equals
+    :func:`visprim.vectors.vectors_from_frames` of the whole segment, bit for bit."""
+    from visprim.features import periodic_channels
+    from visprim.online.segmenter import OnlineSegmenter
+    from visprim.vectors import vectors_from_frames
+
+    model = PrimitiveModel(n_components=6, n_clusters=4, n_init=1, offsets=offsets).fit(trials[:4])
+    seg = OnlineSegmenter(model)
+    rng = np.random.default_rng(2)
+    channels = int(model.n_channels)
+    for k in [2, 3, 17, 90]:
+        values = np.cumsum(rng.normal(scale=0.4, size=(k, channels)), axis=0)
+        want = vectors_from_frames(
+            values,
+            [0.0],
+            [float(k - 1)],
+            trial=[0],
+            starts=[0.0],
+            ends=[1.0],
+            n_samples=int(model.n_samples),
+            periodic_channels=periodic_channels(str(model.features), len(seg.arms)),
+            offsets=offsets,
+        ).vectors
+        np.testing.assert_array_equal(seg._vectors(values), want)

@@ -102,6 +102,14 @@ class CausalSos:
     @property
     def memory_bytes(self) -> int: ...
 
+def segment_channels(
+    sos: NDArray[np.float64],
+    raw: NDArray[np.float64],
+    start: int,
+    stop: int,
+    features: str,
+) -> NDArray[np.float64]: ...
+
 class OnlineFrontEnd:
     def __new__(
         cls,

@@ -467,6 +467,17 @@ CausalSos = _visprim.CausalSos
 OnlineFrontEnd = _visprim.OnlineFrontEnd
 
 
+def segment_channels(sos: ArrayLike, raw: ArrayLike, start: int, stop: int, features: str) -> _F64:
+    """Channels ``(stop − start, C)`` of frames ``start:stop`` of raw arm angles ``raw``
+    ``(n, 4 n_arms)`` radians, after the zero-phase filter ``sos`` of the whole window: the
+    same as ``from_angles(lowpass(raw, short="reduce")[start:stop], features)``
+    (:func:`visprim.filtering.lowpass` with ``sos``'s order and cutoff, its bits;
+    :func:`visprim.features.from_angles`, within an ulp) in one call. ``features``:
+    ``"zyz"`` or ``"directions"``. Used for the closed segments of
+    :mod:`visprim.online.segmenter`."""
+    return _visprim.segment_channels(_f64(sos, "sos"), _f64(raw, "raw"), start, stop, features)
+
+
 def eigh(a: ArrayLike, *, k: int | None = None) -> tuple[_F64, _F64]:
     """Eigendecomposition of a symmetric matrix (faer), eigenvalues in DESCENDING order.
 

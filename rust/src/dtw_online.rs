@@ -24,9 +24,11 @@
 //! then the square root): the same bits as [`crate::dtw`]. The recursion then runs along the
 //! row, for four references at a time in lockstep (references grouped by length at
 //! construction), so that four independent chains of `D(i, j − 1) → D(i, j)` overlap in the
-//! processor; the open-end costs of the last frame of a push are taken along the way. Vector
-//! widths are chosen by [`crate::simd`]; every level gives the same bits (no fused
-//! multiply-add; the minima of the recursion are exact selections, values being never NaN).
+//! processor. The open-end costs of the last frame of a push are taken afterwards, over each
+//! row in SIMD lanes (the divisions `D(n − 1, j) / (n + j + 1)` were the recursion's slowest
+//! step when taken along it, one frame per push). Vector widths are chosen by
+//! [`crate::simd`]; every level gives the same bits (no fused multiply-add; the minima are
+//! exact selections, values being never NaN).
 
 use crate::ragged::trial_bounds;
 use crate::simd::Level;
@@ -50,10 +52,15 @@ pub struct OnlineDtw {
     open_at: usize,
     n: usize,
     distances: Distances,
+    open_min: OpenMin,
 }
 
 /// The local distances of one query frame to one reference's frames (module docstring).
 type Distances = fn(&[f64], &[f64], &mut [f64]);
+
+/// `min_j row[j] / (n + j + 1)`: the open-end cost of one reference's row after `n` query
+/// frames (module docstring).
+type OpenMin = fn(&[f64], usize) -> f64;
 
 /// References in one lockstep group of the recursion.
 const LOCKSTEP: usize = 4;
@@ -117,6 +124,7 @@ impl OnlineDtw {
             bounds,
             n: 0,
             distances: pick(level),
+            open_min: pick_open_min(level),
         })
     }
 
@@ -168,26 +176,26 @@ impl OnlineDtw {
             ));
         }
         let k = frames.len() / dim;
-        for (i, a) in frames.chunks_exact(dim).enumerate() {
+        for a in frames.chunks_exact(dim) {
             let first = self.n == 0;
             for &(s, e) in &self.bounds {
                 let refs = &self.references[s * dim..e * dim];
                 (self.distances)(refs, a, &mut self.local[s..e]);
             }
-            // The open-end costs of the push's last frame, along the recursion.
-            let open = (i + 1 == k).then_some(&mut self.open[..]);
             recurrences(
                 &mut self.rows,
                 &self.local,
                 &self.bounds,
                 &self.groups,
                 first,
-                self.n + 1,
-                open,
             );
             self.n += 1;
         }
         if k > 0 {
+            // The open-end costs of the push's last frame, in SIMD lanes over each row.
+            for (o, &(s, e)) in self.open.iter_mut().zip(&self.bounds) {
+                *o = (self.open_min)(&self.rows[s..e], self.n);
+            }
             self.open_at = self.n;
         }
         Ok(())
@@ -238,14 +246,7 @@ impl OnlineDtw {
             let cost = if self.open_at == n {
                 self.open[r]
             } else {
-                let mut cost = f64::INFINITY;
-                for (j, &d) in self.rows[s..e].iter().enumerate() {
-                    let v = d / (n + j + 1) as f64;
-                    if v < cost {
-                        cost = v;
-                    }
-                }
-                cost
+                (self.open_min)(&self.rows[s..e], n)
             };
             *c = cost;
             // The first of the smallest (numpy's argmin).
@@ -287,8 +288,6 @@ struct Chain {
     diag: f64,
     /// D(i, j − 1).
     left: f64,
-    /// Smallest open-end cost so far along the row.
-    cost: f64,
 }
 
 impl Chain {
@@ -298,55 +297,43 @@ impl Chain {
         Self {
             diag,
             left: f64::INFINITY,
-            cost: f64::INFINITY,
         }
     }
 
     /// `D(i, j) = d + min(D(i−1, j−1), D(i−1, j), D(i, j−1))` in place of `D(i − 1, j)`
     /// (the offline kernel's order of the minimum; `x < y` selections equal `f64::min` since
-    /// no value is NaN and none is −0), and the open-end cost `D(i, j) / denom` when `open`.
+    /// no value is NaN and none is −0).
     #[inline(always)]
-    fn step(&mut self, cell: &mut f64, d: f64, denom: f64, open: bool) {
+    fn step(&mut self, cell: &mut f64, d: f64) {
         let up = *cell;
         let m = if up < self.diag { up } else { self.diag };
         let best = if self.left < m { self.left } else { m };
         self.diag = up;
         self.left = d + best;
         *cell = self.left;
-        if open {
-            let v = self.left / denom;
-            if v < self.cost {
-                self.cost = v;
-            }
-        }
     }
 }
 
 /// Row `n − 1` of every reference's table from row `n − 2` and the local distances, the
-/// references of a group in lockstep up to the shortest's length (module docstring); with
-/// `open`, every reference's open-end cost `min_j D(n − 1, j) / (n + j + 1)` into it.
+/// references of a group in lockstep up to the shortest's length (module docstring).
 fn recurrences(
     rows: &mut [f64],
     local: &[f64],
     bounds: &[(usize, usize)],
     groups: &[Vec<usize>],
     first: bool,
-    n: usize,
-    mut open: Option<&mut [f64]>,
 ) {
-    let want = open.is_some();
     for group in groups {
         let mut chains = [Chain::new(first); LOCKSTEP];
         let mut done = 0;
-        if let &[r0, r1, r2, r3] = &group[..] {
-            let s = [bounds[r0].0, bounds[r1].0, bounds[r2].0, bounds[r3].0];
-            // Grouped shortest first: r0 is the shortest.
-            let short = bounds[r0].1 - bounds[r0].0;
+        if group.len() == LOCKSTEP {
+            let s: [usize; LOCKSTEP] = std::array::from_fn(|l| bounds[group[l]].0);
+            // Grouped shortest first: the first is the shortest.
+            let short = bounds[group[0]].1 - bounds[group[0]].0;
             for j in 0..short {
-                let denom = (n + j + 1) as f64;
                 for (chain, &start) in chains.iter_mut().zip(&s) {
                     let at = start + j;
-                    chain.step(&mut rows[at], local[at], denom, want);
+                    chain.step(&mut rows[at], local[at]);
                 }
             }
             done = short;
@@ -354,13 +341,62 @@ fn recurrences(
         for (chain, &r) in chains.iter_mut().zip(group) {
             let (s, e) = bounds[r];
             for j in done..e - s {
-                let denom = (n + j + 1) as f64;
-                chain.step(&mut rows[s + j], local[s + j], denom, want);
-            }
-            if let Some(open) = open.as_deref_mut() {
-                open[r] = chain.cost;
+                chain.step(&mut rows[s + j], local[s + j]);
             }
         }
+    }
+}
+
+/// Lanes of the open-end kernels (`open_min_*`).
+const OPEN_LANES: usize = 8;
+
+macro_rules! open_min_kernel {
+    ($name:ident, $($feature:literal)?) => {
+        /// `min_j row[j] / (n + j + 1)` (infinite for an empty row), the divisions in
+        /// `OPEN_LANES` lanes: each quotient is the correctly rounded one of the scalar
+        /// loop, and a minimum of values that are never NaN is exact in any order, so every
+        /// level gives the scalar loop's bits (the denominators, integers below 2⁵³, are
+        /// exact in f64).
+        $(#[target_feature(enable = $feature)])?
+        fn $name(row: &[f64], n: usize) -> f64 {
+            let mut best = [f64::INFINITY; OPEN_LANES];
+            let mut denom = [0.0f64; OPEN_LANES];
+            for (l, d) in denom.iter_mut().enumerate() {
+                *d = (n + 1 + l) as f64;
+            }
+            let mut blocks = row.chunks_exact(OPEN_LANES);
+            for block in &mut blocks {
+                for ((b, d), &x) in best.iter_mut().zip(denom.iter_mut()).zip(block) {
+                    let v = x / *d;
+                    *b = if v < *b { v } else { *b };
+                    *d += OPEN_LANES as f64;
+                }
+            }
+            for ((b, d), &x) in best.iter_mut().zip(&denom).zip(blocks.remainder()) {
+                let v = x / *d;
+                *b = if v < *b { v } else { *b };
+            }
+            best.iter().fold(f64::INFINITY, |m, &v| if v < m { v } else { m })
+        }
+    };
+}
+
+open_min_kernel!(open_min_portable,);
+#[cfg(target_arch = "x86_64")]
+open_min_kernel!(open_min_avx2, "avx2,fma");
+#[cfg(target_arch = "x86_64")]
+open_min_kernel!(open_min_avx512, "avx512f,avx512vl,avx2,fma");
+
+/// The open-end kernel at `level` (one this CPU runs).
+fn pick_open_min(level: Level) -> OpenMin {
+    assert!(crate::simd::cpu_runs(level), "{level:?} not available");
+    match level {
+        // SAFETY (both): the CPU has the features the functions were compiled for.
+        #[cfg(target_arch = "x86_64")]
+        Level::Avx512 => |r, n| unsafe { open_min_avx512(r, n) },
+        #[cfg(target_arch = "x86_64")]
+        Level::Avx2Fma => |r, n| unsafe { open_min_avx2(r, n) },
+        _ => open_min_portable,
     }
 }
 
@@ -620,6 +656,30 @@ mod tests {
             (0, 0.0, f64::INFINITY)
         );
         assert!(online.running(&[0; 4], &mut costs).is_err());
+    }
+
+    #[test]
+    fn the_open_end_lanes_give_the_scalar_loops_bits() {
+        let mut seed = 29;
+        for len in [0usize, 1, 7, 8, 9, 31, 64, 101] {
+            let mut row: Vec<f64> = (0..len).map(|_| 10.0 * (lcg(&mut seed) + 0.5)).collect();
+            if len > 3 {
+                row[2] = f64::INFINITY;
+            }
+            for n in [1usize, 2, 17, 1000] {
+                let mut want = f64::INFINITY;
+                for (j, &d) in row.iter().enumerate() {
+                    let v = d / (n + j + 1) as f64;
+                    if v < want {
+                        want = v;
+                    }
+                }
+                for level in crate::simd::levels() {
+                    let got = pick_open_min(level)(&row, n);
+                    assert_eq!(got.to_bits(), want.to_bits(), "len {len}, n {n}, {level:?}");
+                }
+            }
+        }
     }
 
     #[test]

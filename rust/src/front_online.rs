@@ -52,7 +52,7 @@ pub enum Features {
 }
 
 impl Features {
-    fn per_arm(self) -> usize {
+    pub(crate) fn per_arm(self) -> usize {
         match self {
             Features::Zyz => 4,
             Features::Directions => 6,
@@ -286,6 +286,27 @@ impl Continuity {
             }
         }
         Ok(())
+    }
+}
+
+/// The model's per-frame channels of arm angles `(k, 4 n_arms)` (γ, β, α, elbow per arm,
+/// radians), appended to `out`: the angles themselves (`Zyz`), or per arm the unit upper-arm
+/// direction (the rotation's third column) and the forearm's (`R · (sin θ, 0, cos θ)`) in
+/// the shoulder frame (`Directions`), as `visprim.features.from_angles` (within 1 ulp per
+/// product: numpy's matrix product may use its BLAS's fused multiply-adds).
+pub fn channels_of_angles(features: Features, angles: &[f64], out: &mut Vec<f64>) {
+    match features {
+        Features::Zyz => out.extend_from_slice(angles),
+        Features::Directions => {
+            for q in angles.chunks_exact(4) {
+                let r = shoulder_rotation(q[0], q[1], q[2]);
+                let (st, ct) = q[3].sin_cos();
+                out.extend_from_slice(&[r[0][2], r[1][2], r[2][2]]);
+                for ri in &r {
+                    out.push(ri[0] * st + ri[1] * 0.0 + ri[2] * ct);
+                }
+            }
+        }
     }
 }
 
@@ -589,21 +610,7 @@ impl OnlineFrontEnd {
         // Stage 3: the channels.
         let values_len = elements::<f64>(&[k, self.channels], "values")?;
         reserve(&mut out.values, values_len)?;
-        match self.cfg.features {
-            Features::Zyz => out.values.extend_from_slice(&filtered),
-            Features::Directions => {
-                for row in filtered.chunks_exact(a4) {
-                    for q in row.chunks_exact(4) {
-                        let r = shoulder_rotation(q[0], q[1], q[2]);
-                        let (st, ct) = q[3].sin_cos();
-                        out.values.extend_from_slice(&[r[0][2], r[1][2], r[2][2]]);
-                        for ri in &r {
-                            out.values.push(ri[0] * st + ri[1] * 0.0 + ri[2] * ct);
-                        }
-                    }
-                }
-            }
-        }
+        channels_of_angles(self.cfg.features, &filtered, &mut out.values);
         self.work_values = filtered;
         self.speeds(chunk.times, &out.values, &mut out.speeds)
     }

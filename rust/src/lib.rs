@@ -28,6 +28,7 @@ pub mod sqdist;
 pub mod dtw;
 pub mod dtw_online;
 pub mod front_online;
+pub mod segment_online;
 pub mod sosfilt_online;
 
 pub mod triangulate;

@@ -70,6 +70,8 @@ class OnlineRecogniser:
             np.unique(self.labels, return_inverse=True)[1].reshape(-1), dtype=np.int64
         )
         self.describe = describe
+        #: The labels as a list (indexed at every push: cheaper than a numpy index).
+        self._label_list = list(self.labels)
 
     @classmethod
     def from_classifier(cls, classifier: Any) -> OnlineRecogniser:
@@ -104,7 +106,7 @@ class OnlineRecogniser:
         """``(label, confidence, cost)`` of the open-end match so far: :func:`confidence` of
         the open-end costs, in one Rust call (:meth:`visprim.kernels.OnlineDtw.running`)."""
         best, conf, cost = self.dtw.running(self._codes)
-        return self.labels[best], conf, cost
+        return self._label_list[best], conf, cost
 
     def final(self) -> tuple[Any, float, float]:
         """``(label, confidence, cost)`` of the closed-end match of the whole query."""

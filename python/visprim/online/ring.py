@@ -37,14 +37,17 @@ class FrameRing:
         k = rows.shape[0]
         if k == 0:
             return
-        if k >= self.capacity:
-            rows = rows[-self.capacity :]
-            self.end += k - self.capacity
-            k = self.capacity
-        i = self.end % self.capacity
-        first = min(k, self.capacity - i)
-        self._data[i : i + first] = rows[:first]
-        if first < k:
+        cap = self.capacity
+        if k >= cap:
+            rows = rows[-cap:]
+            self.end += k - cap
+            k = cap
+        i = self.end % cap
+        if i + k <= cap:  # one copy (a frame at a time: always)
+            self._data[i : i + k] = rows
+        else:
+            first = cap - i
+            self._data[i:] = rows[:first]
             self._data[: k - first] = rows[first:]
         self.end += k
 
@@ -52,6 +55,9 @@ class FrameRing:
         """Frames ``[a, b)`` (absolute indices) as a new ``(b - a, channels)`` array."""
         if not self.start <= a <= b <= self.end:
             raise IndexError(f"frames [{a}, {b}) are not held (held: [{self.start}, {self.end}))")
+        i = a % self.capacity
+        if i + (b - a) <= self.capacity:  # not wrapped: one slice
+            return self._data[i : i + (b - a)].copy()
         idx = np.arange(a, b) % self.capacity
         return self._data[idx]
 

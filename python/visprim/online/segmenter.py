@@ -49,7 +49,8 @@ Each closed segment is resampled like a training segment
 (:meth:`~visprim.model.PrimitiveModel.assign`). With ``segment_filter="zero_phase"``
 (default) the segment's values are not the causal filter's: its raw angles, from
 ``_LEAD`` frames before its start to the frame that decided its end, go through the model's
-own zero-phase filter (:func:`visprim.filtering.lowpass`, the offline order), as offline.
+own zero-phase filter (:func:`visprim.filtering.lowpass`, the offline order), as offline
+(filter and channels in one Rust call, :func:`visprim.kernels.segment_channels`).
 This look-ahead costs no latency (those frames have arrived when the segment closes) and
 gives the segment the offline shape (the causal order-2 filter lags and smooths less);
 ``"causal"`` uses the causally filtered values.
@@ -76,8 +77,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from visprim import kernels
-from visprim.features import from_angles, periodic_channels
-from visprim.filtering import butterworth, lowpass
+from visprim.features import periodic_channels
+from visprim.filtering import butterworth
 from visprim.ik import DEFAULT_SINGULAR_ANGLE
 from visprim.model import PrimitiveModel
 from visprim.online.events import MovementEnded, SegmentClosed
@@ -92,7 +93,7 @@ from visprim.segment.seg2 import (
     ROBUST_SLOWEST,
 )
 from visprim.trial import Trial
-from visprim.vectors import amplitude_gains, vectors_from_frames
+from visprim.vectors import OFFSETS, amplitude_gains, turn_offsets
 
 __all__ = ["Frames", "OnlineSegmenter", "frames_of"]
 
@@ -290,6 +291,11 @@ class OnlineSegmenter:
         #: ``(k, 6 n_arms)`` (:func:`visprim.classify.arm_directions`), from the front end.
         self.bone_directions: NDArray[np.float64] = np.zeros((0, 6 * len(self.arms)))
         self._vector_periodic = periodic_channels(self.features, len(self.arms))
+        self._n_samples = int(model.n_samples)
+        #: offsets="mean": each channel's mean is taken off a segment vector (else turns).
+        self._mean_offsets = str(model.offsets) == "mean"
+        if str(model.offsets) not in OFFSETS:
+            raise ValueError(f"model offsets must be one of {list(OFFSETS)}, got {model.offsets!r}")
         self._n_channels = int(model.n_channels)
         # The fitted projection and centres, taken once: a closed segment is projected and
         # assigned here directly (model.transform's input checks cost more than the product).
@@ -298,6 +304,8 @@ class OnlineSegmenter:
         self._components = np.ascontiguousarray(basis.components(int(model.n_components)))
         self._mean_projection = basis.mean @ self._components
         self._centres = np.ascontiguousarray(model.cluster_centers_, dtype=np.float64)
+        #: The model's own (zero-phase) filter of a closed segment's raw angles.
+        self._segment_sos = butterworth(int(model.filter_order), float(model.cutoff))
         #: Each primitive's rebuilt vector (offsets="mean"'s amplitude), computed once.
         self._rebuilt: dict[int, NDArray[np.float64]] = {}
         self._ring: FrameRing | None = None
@@ -662,13 +670,33 @@ class OnlineSegmenter:
         upto = min(upto, self._raw.end)
         lo = max(self._raw.start, ra - _LEAD)
         raw = self._raw.window(lo, upto)
-        smooth = lowpass(
-            raw,
-            order=int(self.model.filter_order),
-            cutoff=float(self.model.cutoff),
-            short="reduce",
+        # lowpass(raw, short="reduce") then from_angles, in one Rust call.
+        return kernels.segment_channels(
+            self._segment_sos, raw, ra - lo, min(rb + 1 - lo, raw.shape[0]), self.features
         )
-        return from_angles(smooth[ra - lo : rb + 1 - lo], self.features)
+
+    def _vectors(self, values: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The segment vector ``(1, d)`` of a closed segment's values ``(k, C)``:
+        :func:`~visprim.vectors.vectors_from_frames` of the whole of ``values`` (the same
+        kernel and arithmetic: resampled to ``n_samples``, less each channel's mean or whole
+        turns), without its argument checks and result record (equal to it in
+        ``tests/test_online_close.py``)."""
+        n = self._n_samples
+        vectors = np.asarray(
+            kernels.resample_segments(
+                values, np.zeros(1), np.array([float(values.shape[0] - 1)]), n=n
+            )
+        )
+        c = values.shape[1]
+        if self._mean_offsets:
+            # numpy's mean (ndarray.mean: the sum, then divided by the count), without its
+            # Python wrapper.
+            shift = np.add.reduce(vectors.reshape(1, c, n), axis=2) / n
+        else:
+            shift = turn_offsets(vectors, n, self._vector_periodic)
+        if np.any(shift):
+            vectors = (vectors.reshape(-1, c, n) - shift[:, :, None]).reshape(vectors.shape)
+        return vectors
 
     def _project(self, vectors: NDArray[np.float64]) -> NDArray[np.float64]:
         """Projections ``(N, f)`` of segment vectors ``(N, d)`` (radians): ``s E_f − s̄ E_f``,
@@ -683,26 +711,16 @@ class OnlineSegmenter:
         a = max(a, self._ring.start)
         values = self._segment_values(a, b, upto)
         start, end = self._movement_time(a), self._movement_time(b)
-        sv = vectors_from_frames(
-            values,
-            [0.0],
-            [float(values.shape[0] - 1)],
-            trial=[0],
-            starts=[start],
-            ends=[end],
-            n_samples=int(self.model.n_samples),
-            periodic_channels=self._vector_periodic,
-            offsets=str(self.model.offsets),
-        )
-        labels, dist = kernels.kmeans_predict(self._project(sv.vectors), self._centres)
+        vectors = self._vectors(values)
+        labels, dist = kernels.kmeans_predict(self._project(vectors), self._centres)
         amplitude = 1.0
-        if str(self.model.offsets) == "mean":
+        if self._mean_offsets:
             k = int(labels[0])
             rebuilt = self._rebuilt.get(k)
             if rebuilt is None:
                 rebuilt = self.model.cluster_centers_[k] @ self.model.components_.T
                 rebuilt = self._rebuilt[k] = rebuilt + self.model.mean_
-            amplitude = float(amplitude_gains(sv.vectors, rebuilt[None, :])[0])
+            amplitude = float(amplitude_gains(vectors, rebuilt[None, :])[0])
         index = self._n_seg
         self._n_seg += 1
         return SegmentClosed(

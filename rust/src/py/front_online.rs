@@ -117,15 +117,7 @@ impl OnlineFrontEnd {
                 ))),
             })
             .collect::<PyResult<Vec<bool>>>()?;
-        let features = match features {
-            "zyz" => Features::Zyz,
-            "directions" => Features::Directions,
-            other => {
-                return Err(PyValueError::new_err(format!(
-                    "features must be 'zyz' or 'directions', got {other:?}"
-                )))
-            }
-        };
+        let features = features_arg(features)?;
         let cfg = Config {
             left,
             features,
@@ -253,7 +245,49 @@ impl OnlineFrontEnd {
     }
 }
 
+fn features_arg(features: &str) -> PyResult<Features> {
+    match features {
+        "zyz" => Ok(Features::Zyz),
+        "directions" => Ok(Features::Directions),
+        other => Err(PyValueError::new_err(format!(
+            "features must be 'zyz' or 'directions', got {other:?}"
+        ))),
+    }
+}
+
+/// ``segment_channels(sos, raw, start, stop, features)``: the channels ``(stop − start,
+/// channels)`` of frames ``start:stop`` of the raw arm angles ``raw`` ``(n, 4 n_arms)``
+/// radians after the zero-phase filter ``sos`` ``(n_sections, 6)`` of the whole window
+/// (scipy's default padding, ``n − 1`` frames for a shorter window), ``features``
+/// ``"zyz"`` or ``"directions"`` (:mod:`visprim.online.segmenter`). ValueError for bad
+/// shapes, ``not start < stop <= n`` or a non-finite angle.
+#[pyfunction]
+fn segment_channels<'py>(
+    py: Python<'py>,
+    sos: &Bound<'py, PyAny>,
+    raw: &Bound<'py, PyAny>,
+    start: usize,
+    stop: usize,
+    features: &str,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let features = features_arg(features)?;
+    let sos_values = array(sos, "sos", &[None, Some(6)])?;
+    let sections: Vec<Sos> = sos_values
+        .values()
+        .chunks_exact(6)
+        .map(|s| s.try_into().expect("chunks of 6"))
+        .collect();
+    let r = array(raw, "raw", &[None, None])?;
+    let width = r.shape[1];
+    let values = r.values();
+    let out = py.detach(|| {
+        crate::segment_online::segment_channels(&sections, &values, width, start, stop, features)
+    })?;
+    matrix(py, out, width / 4 * features.per_arm())
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<OnlineFrontEnd>()?;
+    m.add_function(wrap_pyfunction!(segment_channels, m)?)?;
     Ok(())
 }
