@@ -58,6 +58,12 @@ def test_draw_workers_counts() -> None:
     assert draw_workers(1000, 1) == 0 and draw_workers(1000, 0) == 0
     assert draw_workers(1, 4) == 0  # one frame: nothing to share
     assert draw_workers(50) == 0  # too few frames to pay for a fork
+    # An MP4 part needs a core for its encoder too: never more parts than cores / 2.
+    from visprim.sim.frame_workers import usable_cores
+
+    assert draw_workers(10**6, cores_per_part=2) <= max(usable_cores() // 2, 0)
+    with pytest.raises(ValueError, match="cores_per_part"):
+        draw_workers(1000, cores_per_part=0)
     for bad in (-1, True, 2.0):
         with pytest.raises(ValueError, match="whole number"):
             draw_workers(1000, bad)  # type: ignore[arg-type]

@@ -42,17 +42,26 @@ def usable_cores() -> int:
         return os.cpu_count() or 1
 
 
-def draw_workers(n_frames: int, workers: int | None = None) -> int:
-    """How many worker processes share ``n_frames`` frames: ``workers`` if given (a whole
-    number ≥ 0), else the usable cores up to :data:`MAX_DRAW_WORKERS`, fewer so that each
-    has :data:`MIN_FRAMES_PER_WORKER` frames. 0 (draw in this process) where fork is
-    unavailable or unsafe (only Linux forks here) or fewer than 2 would work."""
+def draw_workers(n_frames: int, workers: int | None = None, cores_per_part: int = 1) -> int:
+    """How many processes share ``n_frames`` frames: ``workers`` if given (a whole number
+    ≥ 0), else one per ``cores_per_part`` usable cores, up to :data:`MAX_DRAW_WORKERS`, fewer
+    so that each has :data:`MIN_FRAMES_PER_WORKER` frames. 0 (draw in one process) where fork
+    is unavailable or unsafe (only Linux forks here) or fewer than 2 would work.
+
+    A part keeps about one core busy drawing; an MP4 part keeps a second busy with its
+    encoder (x264 in one thread), so MP4 parts ask for ``cores_per_part=2``: on 2 cores an
+    MP4 is then drawn in one process, which already keeps both cores busy (docs/imitation.rst
+    has the measurements)."""
+    if cores_per_part < 1:
+        raise ValueError(f"cores_per_part must be ≥ 1, got {cores_per_part}")
     if workers is not None:
         if isinstance(workers, bool) or not isinstance(workers, int) or workers < 0:
             raise ValueError(f"workers must be a whole number ≥ 0, got {workers!r}")
         n = min(workers, max(0, n_frames))
     else:
-        n = min(usable_cores(), MAX_DRAW_WORKERS, n_frames // MIN_FRAMES_PER_WORKER)
+        n = min(
+            usable_cores() // cores_per_part, MAX_DRAW_WORKERS, n_frames // MIN_FRAMES_PER_WORKER
+        )
     if not sys.platform.startswith("linux") or n < 2:
         return 0
     return n

@@ -238,15 +238,16 @@ def render_imitation(
     atomically, one frame at a time. A recording read from a video shows its own frames with
     the detected arm, on the video's clock (:mod:`visprim.sim.sidebyside_video`); any other
     shows the recorded arm as a stick figure at the playback's frame rate, its frames drawn
-    by ``workers`` processes (:func:`visprim.sim.frame_workers.draw_workers`; None: one per
-    usable core, where that helps). Returns the path."""
+    by ``workers`` processes (None: as many as the usable cores keep busy,
+    :func:`visprim.sim.frame_workers.draw_workers`). Returns the path."""
     from visprim.sim.frame_workers import draw_workers
     from visprim.sim.sidebyside_video import is_video_trial, render_video_imitation
 
     if is_video_trial(imitation.trial):
         return render_video_imitation(imitation, path, size=size, camera=camera)
     view = SideBySide(imitation, size, camera)
-    n = draw_workers(view.n_frames, workers)
+    mp4 = Path(path).suffix.lower() == ".mp4"
+    n = draw_workers(view.n_frames, workers, cores_per_part=2 if mp4 else 1)
     if n < 2:
         return write_video(path, view.frames(), view.fps)
     return write_video_parts(path, view.frame, view.n_frames, view.fps, n)
