@@ -35,6 +35,16 @@ def _two_arms(right: np.ndarray, left: np.ndarray, name: str) -> Trial:
     )
 
 
+def two_arm_strokes() -> Trial:
+    """One stroke of each arm, 90 frames, the right and the left arm moving differently."""
+    s = np.linspace(0.0, 1.0, 90)
+    right = np.stack(
+        [0.4 + 0.8 * s, 0.5 + np.sin(np.pi * s), 0.2 * s, 0.4 + 0.6 * np.sin(2 * np.pi * s)], 1
+    )
+    left = np.stack([0.3 + 0 * s, 0.4 + 0.9 * np.sin(2 * np.pi * s) ** 2, 0 * s, 1.0 - 0.5 * s], 1)
+    return _two_arms(right, left, "both")
+
+
 def _movement(kind: str, rng: np.random.Generator, i: int) -> Trial:
     duration = rng.uniform(1.6, 2.6)
     s = np.linspace(0.0, 1.0, int(duration / PERIOD))

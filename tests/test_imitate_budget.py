@@ -65,15 +65,10 @@ def test_a_budget_picks_the_best_description_that_fits(data) -> None:
 
 def test_two_arms_share_the_budget(data) -> None:
     """Arms imitated one by one share one budget: the best combination that fits."""
-    from _motion_data import _two_arms
+    from _motion_data import two_arm_strokes
 
     model, _ = data
-    s = np.linspace(0.0, 1.0, 90)
-    right = np.stack(
-        [0.4 + 0.8 * s, 0.5 + np.sin(np.pi * s), 0.2 * s, 0.4 + 0.6 * np.sin(2 * np.pi * s)], 1
-    )
-    left = np.stack([0.3 + 0 * s, 0.4 + 0.9 * np.sin(2 * np.pi * s) ** 2, 0 * s, 1.0 - 0.5 * s], 1)
-    both = _two_arms(right, left, "both")
+    both = two_arm_strokes()
     plain = imitate(model, both, play=False)
     d = plain.metrics["description"]
     assert set(d["arms"]) == {"right", "left"}

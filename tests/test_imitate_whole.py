@@ -195,15 +195,10 @@ def test_a_held_out_movement_takes_the_closest_alternative_within_the_budget(dat
 def test_two_arms_share_the_budget_when_described_whole(data) -> None:
     """A one-arm model on a two-arm recording: each arm described whole takes its share,
     and both together fit the budget."""
-    from _motion_data import _two_arms
+    from _motion_data import two_arm_strokes
 
     model, _ = data
-    s = np.linspace(0.0, 1.0, 90)
-    right = np.stack(
-        [0.4 + 0.8 * s, 0.5 + np.sin(np.pi * s), 0.2 * s, 0.4 + 0.6 * np.sin(2 * np.pi * s)], 1
-    )
-    left = np.stack([0.3 + 0 * s, 0.4 + 0.9 * np.sin(2 * np.pi * s) ** 2, 0 * s, 1.0 - 0.5 * s], 1)
-    both = _two_arms(right, left, "both")
+    both = two_arm_strokes()
     budget = 30.0
     result = imitate(model, both, play=False, budget=budget)
     d = result.metrics["description"]

@@ -666,20 +666,20 @@ def _whole_movement(
         if segs.shape[0] == 0:
             raise ValueError(f"{t.source or name}: no segment found; nothing to imitate")
         times = corpus.times[0]
-        frames = int(np.sum((times >= segs[0, 0] - 1e-9) & (times <= segs[-1, 1] + 1e-9)))
+        span = (times >= segs[0, 0] - 1e-9) & (times <= segs[-1, 1] + 1e-9)
+        frames = int(span.sum())
         if frames > MAX_WHOLE_FRAMES:
             raise ValueError(
                 f"{frames} frames, more than the {MAX_WHOLE_FRAMES} of a movement described "
                 "whole (MAX_WHOLE_FRAMES)"
             )
-        prepared.append((corpus, segs))
-    seconds = [float(g[-1, 1] - g[0, 0]) for _, g in prepared]
-    arms = [c.angles[0].shape[1] // ARM_ANGLES for c, _ in prepared]
+        prepared.append((corpus, segs, span))
+    seconds = [float(g[-1, 1] - g[0, 0]) for _, g, _ in prepared]
+    arms = [c.angles[0].shape[1] // ARM_ANGLES for c, _, _ in prepared]
     rate = budget * max(seconds) / sum(s * a for s, a in zip(seconds, arms, strict=True))
     out = []
-    for (corpus, segs), sec in zip(prepared, seconds, strict=True):
+    for (corpus, _, span), sec in zip(prepared, seconds, strict=True):
         times = corpus.times[0]
-        span = (times >= segs[0, 0] - 1e-9) & (times <= segs[-1, 1] + 1e-9)
         values, descs = [], []
         for c in range(0, corpus.angles[0].shape[1], ARM_ANGLES):
             arm = np.ascontiguousarray(corpus.angles[0][span, c : c + ARM_ANGLES])

@@ -101,12 +101,7 @@ impl OnlineFrontEnd {
         every: usize,
         speed_window: f64,
     ) -> PyResult<Self> {
-        let sos_values = array(sos, "sos", &[None, Some(6)])?;
-        let sections: Vec<Sos> = sos_values
-            .values()
-            .chunks_exact(6)
-            .map(|s| s.try_into().expect("chunks of 6"))
-            .collect();
+        let sections = sos_sections(sos)?;
         let left = arms
             .iter()
             .map(|a| match a.as_str() {
@@ -245,6 +240,16 @@ impl OnlineFrontEnd {
     }
 }
 
+/// The second-order sections of ``sos`` ``(n_sections, 6)``, float64.
+fn sos_sections(sos: &Bound<'_, PyAny>) -> PyResult<Vec<Sos>> {
+    let values = array(sos, "sos", &[None, Some(6)])?;
+    Ok(values
+        .values()
+        .chunks_exact(6)
+        .map(|s| s.try_into().expect("chunks of 6"))
+        .collect())
+}
+
 fn features_arg(features: &str) -> PyResult<Features> {
     match features {
         "zyz" => Ok(Features::Zyz),
@@ -271,12 +276,7 @@ fn segment_channels<'py>(
     features: &str,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let features = features_arg(features)?;
-    let sos_values = array(sos, "sos", &[None, Some(6)])?;
-    let sections: Vec<Sos> = sos_values
-        .values()
-        .chunks_exact(6)
-        .map(|s| s.try_into().expect("chunks of 6"))
-        .collect();
+    let sections = sos_sections(sos)?;
     let r = array(raw, "raw", &[None, None])?;
     let width = r.shape[1];
     let values = r.values();
