@@ -623,10 +623,18 @@ ONLINE_OPTIONS: Mapping[str, OnlineOption] = {
     o.name: o
     for o in (
         OnlineOption(
+            "causal_filter",
+            "fir",
+            "causal low-pass of the angles: an FIR filter that approximates the model's own "
+            "zero-phase filter with one frame of look-ahead ('fir'), or a causal "
+            "Butterworth filter of filter_order at the model's cutoff ('butterworth')",
+            choices=("fir", "butterworth"),
+        ),
+        OnlineOption(
             "filter_order",
             2,
-            "order of the causal Butterworth low-pass, at the model's cutoff (None: the "
-            "model's own order)",
+            "order of the causal Butterworth low-pass (causal_filter='butterworth'), at the "
+            "model's cutoff (None: the model's own order)",
         ),
         OnlineOption(
             "threshold",

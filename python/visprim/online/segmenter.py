@@ -82,7 +82,7 @@ from visprim.filtering import butterworth
 from visprim.ik import DEFAULT_SINGULAR_ANGLE
 from visprim.model import PrimitiveModel
 from visprim.online.events import MovementEnded, SegmentClosed
-from visprim.online.lowpass import group_delay_frames
+from visprim.online.lowpass import causal_lowpass
 from visprim.online.ring import FrameRing
 from visprim.params import ONLINE_OPTIONS
 from visprim.segment.seg2 import (
@@ -200,8 +200,12 @@ class OnlineSegmenter:
     Parameters
     ----------
     model : fitted PrimitiveModel with a SEG-2 constant (``seg2_threshold_``).
+    causal_filter : {"fir", "butterworth"}
+        The causal low-pass (module docstring, :mod:`visprim.online.lowpass`; default
+        ``"fir"``).
     filter_order : int or None
-        Order of the causal low-pass (default 2; None: the model's ``filter_order``).
+        Order of the ``"butterworth"`` low-pass (default 2; None: the model's
+        ``filter_order``).
     threshold : {"fixed", "adaptive"}
         ``c`` lowered for slow movers as the offline robust tuning does (default), or
         ``c`` as fitted (module docstring).
@@ -225,6 +229,7 @@ class OnlineSegmenter:
         self,
         model: PrimitiveModel,
         *,
+        causal_filter: str = _O["causal_filter"],
         filter_order: int | None = _O["filter_order"],
         threshold: str = _O["threshold"],
         rest_timeout: float = _O["rest_timeout"],
@@ -264,18 +269,24 @@ class OnlineSegmenter:
         self.speed_window = float(speed_window)
         self.min_travel = float(np.deg2rad(min_travel_deg))
         order = int(model.filter_order) if filter_order is None else int(filter_order)
-        #: Order of the causal low-pass.
+        #: The causal low-pass (:mod:`visprim.online.lowpass`) and, for ``"butterworth"``,
+        #: its order.
+        self.causal_filter = _checked("causal_filter", causal_filter)
         self.filter_order = order
-        #: Frames by which the filtered angles lag the movement (the filter's group delay,
-        #: rounded): segment times are reported that many frames earlier.
-        self._shift = int(round(group_delay_frames(order, float(model.cutoff))))
+        sos, shift = causal_lowpass(
+            self.causal_filter, order, float(model.cutoff), int(model.filter_order)
+        )
+        #: Frames by which the filtered angles lag the movement (the FIR's look-ahead, or
+        #: the Butterworth filter's group delay, rounded): segment times are reported that
+        #: many frames earlier.
+        self._shift = shift
         # Bone directions are exact for any γ, so the causal IK takes γ and α from atan2 on
         # every frame (no interpolation through the singular cones, which needs later
         # frames); Z-Y-Z models keep the interpolation within each chunk.
         singular = 0.0 if self.features == "directions" else DEFAULT_SINGULAR_ANGLE
         #: Stages 1–3 and the threshold (module docstring), state kept between chunks.
         self._front = kernels.OnlineFrontEnd(
-            butterworth(order, float(model.cutoff)),
+            sos,
             list(self.arms),
             self.features,
             singular,
