@@ -170,6 +170,16 @@ def test_replay_agrees_with_the_offline_pipeline(fitted) -> None:
     assert all(np.all(r.latencies >= 0) for r in results)
 
 
+def test_a_replay_with_no_online_segment_counts_every_offline_one_as_missed(fitted) -> None:
+    model, _, test = fitted
+    # No run travels 10,000°: the online path closes no segment, offline cuts as usual.
+    r = compare_trial(model, test[0], None, chunk=16, min_travel_deg=10_000.0)
+    assert r.online_segments.shape == (0, 2)
+    assert r.offline_segments.shape[0] > 0
+    assert r.primitives == (0, r.offline_segments.shape[0])
+    assert r.boundaries[0] == 0
+
+
 def test_event_stream_shape_and_json(fitted) -> None:
     model, clf, test = fitted
     events = _events(model, clf, test[1], 5)

@@ -15,7 +15,7 @@ recording). :func:`summarise` pools the trials:
 * **class**: the online final class (the last movement's :class:`MovementEnded`) against
   ``predict``;
 * **latency**: stream time from each segment's end to its event (``emitted − end``). The
-  segment times are the filtered frames' shifted back by the causal filter's group delay
+  segment times are the filtered frames' shifted back by the causal filter's latency
   (:mod:`visprim.online.segmenter`), so the delay is part of it. Segments closed by the
   end of the stream (:meth:`~OnlinePipeline.flush`) are marked (``at_flush``): their
   latency says nothing of the detection. ``last`` marks a movement's last segment (closed
@@ -120,7 +120,9 @@ def compare_trial(
         matched = 0
     pair = _pairs(off_seg, on_seg)
     equal = (
-        int(np.sum((pair >= 0) & (on_prim[np.maximum(pair, 0)] == off_prim))) if pair.size else 0
+        int(np.sum((pair >= 0) & (on_prim[np.maximum(pair, 0)] == off_prim)))
+        if pair.size and on_prim.size
+        else 0
     )
     return TrialComparison(
         name=trial.name or (trial.source or ""),

@@ -10,10 +10,12 @@ state kept between chunks; SEG-2's rules (4–5) in Python, frame by frame:
    so the segments do not depend on how the stream is cut into chunks. Z-Y-Z models keep
    the interpolation within each chunk and the angles continuous across chunks by whole
    turns (their segments may depend on the chunking near the singular cones).
-2. **Causal low-pass** (:mod:`visprim.online.lowpass`) of the angles, Butterworth of
-   ``filter_order`` (default 2) at the model's normalised ``cutoff``. The model's own order
-   (10, zero phase offline) would delay every event by 7.7 frames (262 ms at 34 ms frames);
-   order 2 delays by 1.7 frames (58 ms). ``filter_order=None`` uses the model's order.
+2. **Causal low-pass** (:mod:`visprim.online.lowpass`) of the angles. By default
+   (``causal_filter="fir"``) an FIR filter fitted to the model's own zero-phase filter with
+   one frame of look-ahead: the filtered frame ``k − 1`` is known at frame ``k``.
+   ``causal_filter="butterworth"`` is a causal Butterworth of ``filter_order`` (default 2)
+   at the model's normalised ``cutoff``, which delays by 1.7 frames (58 ms) at order 2 and
+   by 7.7 frames (262 ms) at the model's order 10 (``filter_order=None``).
 3. The model's per-frame channels (:func:`visprim.features.from_angles`) and
    ``z = Σ θ̇ᵢ²`` with numpy's gradient, central differences from the timestamps: the
    velocity of frame ``k`` needs frame ``k + 1`` (**one frame of look-ahead**).
@@ -52,17 +54,18 @@ Each closed segment is resampled like a training segment
 own zero-phase filter (:func:`visprim.filtering.lowpass`, the offline order), as offline
 (filter and channels in one Rust call, :func:`visprim.kernels.segment_channels`).
 This look-ahead costs no latency (those frames have arrived when the segment closes) and
-gives the segment the offline shape (the causal order-2 filter lags and smooths less);
+gives the segment the offline shape (a causal filter lags, or smooths less);
 ``"causal"`` uses the causally filtered values.
 
-Latency (stream time from a segment's last frame to its event): the low-pass' group delay
+Latency (stream time from a segment's last frame to its event): the low-pass' latency
 + one frame (velocity) + the time from the slowest point of the gap until the next run
 has lasted ``confirm_frames`` frames above ``c`` (inner boundaries: the gap's slowest
 point is only known once the arm speeds up again, so a long pause costs its second half)
-or ``rest_timeout`` (a movement's last segment). With ``"first_stop"`` it is bounded: the
-group delay (rounded, 2 frames at order 2) + the frame after the stop + its successor,
-4 frames (136 ms at 34 ms frames) for every segment not cut by ``max_segment``. Memory:
-ring buffers of ``max_segment`` seconds of frames (a longer segment is cut there,
+or ``rest_timeout`` (a movement's last segment). With ``"first_stop"`` it is bounded:
+the filter's latency (1 frame for the FIR; the rounded group delay, 2 frames, for the
+order-2 Butterworth) + the frame after the stop + its successor, 3 frames (102 ms at 34 ms
+frames; 4 frames, 136 ms, with the Butterworth) for every segment not cut by
+``max_segment``. Memory: ring buffers of ``max_segment`` seconds of frames (a longer segment is cut there,
 ``forced=True``) and of ``speed_window`` seconds of ``z`` (in the front end, a sorted
 window), allocated once.
 """
