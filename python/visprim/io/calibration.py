@@ -47,7 +47,10 @@ affine fit, 0.4–0.5 px residual) gives ``u' = 0.9928 u − 0.02``, ``v' = 0.99
 (cam01) and ``0.9926 u + 0.09``, ``0.9926 v + 7.19`` (cam02), against the rule's
 ``0.9926 u − 0.004``, ``0.9926 v + 7.05``; cam03/cam04's 1088 × 1920 videos register to
 their images as the identity (scale 1.0000, offsets < 0.1 px). Without the fit, cam01/02's
-keypoints are off by up to 7 px (about 4 px at the person, near the image centre).
+keypoints are off by up to 7 px (about 4 px at the person, near the image centre). It is
+not a codec crop (H.264 stores 1080 as 1088 and crops 8): a crop leaves no black rows, and
+chosen on half of the clip's frames, no crop hypothesis scores better on the other half
+(``benches/video_frame_fit.py``).
 """
 
 from __future__ import annotations

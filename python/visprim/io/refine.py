@@ -214,8 +214,14 @@ def _fit(
     scale: float,
     prior_deg: float,
 ) -> NDArray[np.float64]:
-    """Rotation vectors (V, 3) rad minimising the robust reprojection cost plus the prior."""
+    """Rotation vectors (V, 3) rad minimising the robust reprojection cost plus the prior.
+
+    The solver runs on one BLAS thread: its products and SVDs are of a tall, 12-column
+    Jacobian, and waking OpenBLAS's threads on cores that are busy costs more than the work
+    (``benches/bench_refine.py``: the same rotations, bit for bit, several times faster on a
+    loaded machine)."""
     from scipy.optimize import least_squares
+    from threadpoolctl import threadpool_limits
 
     v = len(cameras)
     sigma = np.deg2rad(prior_deg)
@@ -227,14 +233,15 @@ def _fit(
         # Prior in px: a component of one σ costs as much as one residual of ``scale``.
         return np.concatenate([r[used].ravel(), scale * x])
 
-    sol = least_squares(
-        resid,
-        np.zeros(3 * v),
-        loss="soft_l1",
-        f_scale=scale,
-        max_nfev=REFINE_MAX_EVALUATIONS,
-        x_scale=1.0,
-    )
+    with threadpool_limits(limits=1, user_api="blas"):
+        sol = least_squares(
+            resid,
+            np.zeros(3 * v),
+            loss="soft_l1",
+            f_scale=scale,
+            max_nfev=REFINE_MAX_EVALUATIONS,
+            x_scale=1.0,
+        )
     return np.asarray(sol.x).reshape(v, 3) * sigma
 
 
