@@ -15,7 +15,7 @@ how the choice holds on noisier recordings than the shared ones.
 
 Candidates: the causal Butterworth of order 2 (the former default, 2 frames of latency) and
 :func:`visprim.online.lowpass.fir_taps` with 1 or 2 frames of look-ahead and a stop-band
-weight of 0 or 0.1 (:data:`~visprim.online.lowpass.FIR_STOPBAND_WEIGHT`). Only the
+weight of 0, 0.1 or 1 (:data:`~visprim.online.lowpass.FIR_STOPBAND_WEIGHT`). Only the
 boundaries are compared (the primitive and the class need the whole pipeline:
 ``bench_online.py``). Deterministic.
 """
@@ -56,7 +56,7 @@ def candidates(order: int, cutoff: float) -> dict[str, tuple[np.ndarray, np.ndar
     b2, a2 = signal.sos2tf(butterworth(2, cutoff))
     out["Butterworth order 2 (former default)"] = (b2, a2, 2)
     for lag in (1, 2):
-        for weight in (0.0, 0.1):
+        for weight in (0.0, 0.1, 1.0):
             taps = fir_taps(order, cutoff, lookahead=lag, stopband_weight=weight)
             out[f"FIR, look-ahead {lag}, stop-band weight {weight}"] = (taps, np.ones(1), lag)
     return out
