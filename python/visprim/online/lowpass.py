@@ -40,9 +40,9 @@ __all__ = [
 
 #: Names of the causal designs (:func:`causal_lowpass`).
 CAUSAL_FILTERS: tuple[str, ...] = tuple(ONLINE_OPTIONS["causal_filter"].choices or ())
-#: Frames of look-ahead of the FIR design: its output for a frame is known one frame later.
+#: Look-ahead of the FIR design (frames): its output for a frame is known one frame later.
 FIR_LOOKAHEAD: int = 1
-#: Past frames the FIR design reads (32 frames, 1.1 s at 34 ms frames: the zero-phase
+#: How many past frames the FIR design reads (32, 1.1 s at 34 ms frames: the zero-phase
 #: order-10 filter's response has decayed to below 1 % of its peak by then).
 FIR_PAST: int = 32
 #: Weight of the frequencies where movement has little power, against the first-order

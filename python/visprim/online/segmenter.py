@@ -65,9 +65,9 @@ or ``rest_timeout`` (a movement's last segment). With ``"first_stop"`` it is bou
 the filter's latency (1 frame for the FIR; the rounded group delay, 2 frames, for the
 order-2 Butterworth) + the frame after the stop + its successor, 3 frames (102 ms at 34 ms
 frames; 4 frames, 136 ms, with the Butterworth) for every segment not cut by
-``max_segment``. Memory: ring buffers of ``max_segment`` seconds of frames (a longer segment is cut there,
-``forced=True``) and of ``speed_window`` seconds of ``z`` (in the front end, a sorted
-window), allocated once.
+``max_segment``. Memory: ring buffers of ``max_segment`` seconds of frames (a longer
+segment is cut there, ``forced=True``) and of ``speed_window`` seconds of ``z`` (in the
+front end, a sorted window), allocated once.
 """
 
 from __future__ import annotations
