@@ -39,9 +39,9 @@ from visprim.features import from_angles
 from visprim.filtering import butterworth
 from visprim.model import PrimitiveModel
 from visprim.online import SegmentClosed
+from visprim.online.compare import boundary_counts
 from visprim.online.lowpass import fir_taps
 from visprim.online.segmenter import OnlineSegmenter
-from visprim.segment import boundary_matches, segment_boundaries
 from visprim.trial import Trial
 
 sys.path.insert(0, str(Path(__file__).parent))
@@ -90,13 +90,11 @@ def compare(model: PrimitiveModel, trial: Trial, counts: dict[Any, list[int]]) -
             online = np.array(
                 [[e.start, e.end] for e in events if isinstance(e, SegmentClosed)]
             ).reshape(-1, 2)
-            on_b = segment_boundaries(online) if online.shape[0] else np.zeros(0)
-            off_b = segment_boundaries(offline) if offline.shape[0] else np.zeros(0)
-            m = boundary_matches(on_b, off_b, 0.1)[0] if on_b.size and off_b.size else 0
+            m, n_on, n_off = boundary_counts(online, offline)
             c = counts.setdefault((name, sd), [0, 0, 0])
-            c[0] += int(m)
-            c[1] += int(on_b.size)
-            c[2] += int(off_b.size)
+            c[0] += m
+            c[1] += n_on
+            c[2] += n_off
 
 
 def main() -> None:

@@ -35,9 +35,14 @@ from visprim import kernels
 from visprim.atomic import write_text
 from visprim.model import PrimitiveModel
 from visprim.online import SegmentClosed
-from visprim.online.compare import TrialComparison, _pairs, compare_trial, summarise
+from visprim.online.compare import (
+    TrialComparison,
+    boundary_counts,
+    compare_trial,
+    equal_primitives,
+    summarise,
+)
 from visprim.online.segmenter import OnlineSegmenter
-from visprim.segment import boundary_matches, segment_boundaries
 from visprim.segment.seg2 import (
     _ROBUST_QUANTILE,
     ROBUST_FRACTION,
@@ -82,24 +87,11 @@ def _fed(model: PrimitiveModel, trial: Trial, threshold: str) -> tuple[np.ndarra
 
 def _as_comparison(base: TrialComparison, on: np.ndarray, prim: np.ndarray) -> TrialComparison:
     off = base.offline_segments
-    if on.shape[0] and off.shape[0]:
-        matched, n_on, n_off = boundary_matches(
-            segment_boundaries(on), segment_boundaries(off), 0.1
-        )
-    else:
-        matched = 0
-        n_on = segment_boundaries(on).size if on.shape[0] else 0
-        n_off = segment_boundaries(off).size if off.shape[0] else 0
-    pair = _pairs(off, on)
-    equal = (
-        int(np.sum((pair >= 0) & (prim[np.maximum(pair, 0)] == base.offline_primitives)))
-        if pair.size and prim.size
-        else 0
-    )
+    equal = equal_primitives(off, base.offline_primitives, on, prim)
     none = np.zeros(on.shape[0], dtype=bool)
     return TrialComparison(
         base.name, off, base.offline_primitives, on, prim, np.zeros(on.shape[0]), none, none,
-        "", "", (int(matched), int(n_on), int(n_off)), (equal, int(off.shape[0])),
+        "", "", boundary_counts(on, off), (equal, int(off.shape[0])),
     )  # fmt: skip
 
 

@@ -58,6 +58,7 @@ from pathlib import Path
 import numpy as np
 from _harness import commit, cpu_model
 from numpy.typing import NDArray
+from video_accuracy import MIN_CONFIDENCE, window
 from visprim import kernels
 from visprim.atomic import write_text
 from visprim.io.calibration import Camera, read_calibration
@@ -71,7 +72,6 @@ Array = NDArray[np.float64]
 DARK_LEVEL = 20.0
 #: Frames whose per-pixel median the band count is made on.
 BAND_FRAMES = 10
-MIN_CONFIDENCE = 0.5
 HALVES = ((0, 50), (50, 100))
 
 
@@ -102,17 +102,6 @@ def dark_bands(path: Path) -> dict[str, int]:
         "left": run(cols),
         "right": run(cols[::-1]),
     }
-
-
-def window(q: VideoPoses, a: int, b: int) -> VideoPoses:
-    return dataclasses.replace(
-        q,
-        times=q.times[a:b],
-        world=q.world[a:b],
-        image=q.image[a:b],
-        confidence=q.confidence[a:b],
-        found=q.found[a:b],
-    )
 
 
 def shifted(c: Camera, du: float, dv: float, size: tuple[int, int] | None = None) -> Camera:

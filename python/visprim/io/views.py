@@ -600,30 +600,27 @@ def triangulate_poses(
         raise ValueError(
             f"refine_calibration must be True, False or 'auto', got {refine_calibration!r}"
         )
-    if refine_calibration is True or (refine_calibration == "auto" and refined is None):
-        first = triangulate_keypoints(
-            cameras,
+
+    def triangulate(cams: Sequence[Camera], max_px: float | None) -> Triangulation:
+        return triangulate_keypoints(
+            cams,
             pixels,
             conf,
             min_confidence=min_confidence,
             min_views=min_views,
             pairs=pairs,
-            max_reprojection=None,
+            max_reprojection=max_px,
         )
+
+    if refine_calibration is True or (refine_calibration == "auto" and refined is None):
+        # The left/right check first, no outlier rule: the fit weighs every observation.
+        first = triangulate(cameras, None)
         ref = refine_rotations(
             cameras, first.pixels, first.confidence, min_confidence=min_confidence
         )
         cameras = ref.cameras
         refined = ref.record()
-    tri = triangulate_keypoints(
-        cameras,
-        pixels,
-        conf,
-        min_confidence=min_confidence,
-        min_views=min_views,
-        pairs=pairs,
-        max_reprojection=max_reprojection,
-    )
+    tri = triangulate(cameras, max_reprojection)
     reproj = tri.reprojection
     meta = {
         "format": "video views",

@@ -38,7 +38,13 @@ from visprim.online.segmenter import Frames
 from visprim.segment import boundary_matches, segment_boundaries
 from visprim.trial import Trial
 
-__all__ = ["TrialComparison", "compare_trial", "summarise"]
+__all__ = [
+    "TrialComparison",
+    "boundary_counts",
+    "compare_trial",
+    "equal_primitives",
+    "summarise",
+]
 
 
 @dataclass(frozen=True)
@@ -72,6 +78,32 @@ def _pairs(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.int64]:
         if ov[j] > 0 and ov[j] >= 0.5 * longer:
             out[i] = j
     return out
+
+
+def boundary_counts(
+    online: NDArray[np.float64], offline: NDArray[np.float64], tolerance: float = 0.1
+) -> tuple[int, int, int]:
+    """(matched, online, offline) boundaries of two segmentations ``(n, 2)`` seconds, matched
+    one to one within ``tolerance`` seconds (:func:`visprim.segment.boundary_matches`)."""
+    on = segment_boundaries(online) if online.shape[0] else np.zeros(0)
+    off = segment_boundaries(offline) if offline.shape[0] else np.zeros(0)
+    matched = boundary_matches(on, off, tolerance)[0] if on.size and off.size else 0
+    return int(matched), int(on.size), int(off.size)
+
+
+def equal_primitives(
+    offline: NDArray[np.float64],
+    offline_primitives: NDArray[np.int64],
+    online: NDArray[np.float64],
+    online_primitives: NDArray[np.int64],
+) -> int:
+    """How many offline segments are paired with an online one (:func:`_pairs`) of the same
+    primitive."""
+    pair = _pairs(offline, online)
+    if not (pair.size and online_primitives.size):
+        return 0
+    same = online_primitives[np.maximum(pair, 0)] == offline_primitives
+    return int(np.sum((pair >= 0) & same))
 
 
 def compare_trial(
@@ -110,20 +142,8 @@ def compare_trial(
     on_seg = np.array([[s.start, s.end] for s in segs]).reshape(-1, 2)
     on_prim = np.array([s.primitive for s in segs], dtype=np.int64)
     lat = np.array([s.latency for s in segs])
-    if off_seg.shape[0] and on_seg.shape[0]:
-        matched, n_on, n_off = boundary_matches(
-            segment_boundaries(on_seg), segment_boundaries(off_seg), tolerance
-        )
-    else:
-        n_on = segment_boundaries(on_seg).size if on_seg.shape[0] else 0
-        n_off = segment_boundaries(off_seg).size if off_seg.shape[0] else 0
-        matched = 0
-    pair = _pairs(off_seg, on_seg)
-    equal = (
-        int(np.sum((pair >= 0) & (on_prim[np.maximum(pair, 0)] == off_prim)))
-        if pair.size and on_prim.size
-        else 0
-    )
+    matched, n_on, n_off = boundary_counts(on_seg, off_seg, tolerance)
+    equal = equal_primitives(off_seg, off_prim, on_seg, on_prim)
     return TrialComparison(
         name=trial.name or (trial.source or ""),
         offline_segments=off_seg,

@@ -21,6 +21,8 @@ The output of a chunk does not depend on how the stream was cut into chunks.
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from numpy.typing import NDArray
 from scipy import signal
@@ -69,7 +71,8 @@ def fir_taps(
     ``|Σ_n h_n e^{−iωn} − |H(ω)|²|²`` with ``n`` from ``−lookahead`` to ``past − 1``, weighted
     by ``1 / (1 + (ω / ω_c)²) + stopband_weight`` (``ω_c = π · cutoff``: the first-order
     spectrum of a smooth movement, whose power falls with frequency past the cutoff, plus a
-    floor for the stop band); the taps sum to 1 (constant angles pass unchanged).
+    floor for the stop band); the taps sum to 1 (constant angles pass unchanged). Each design
+    is computed once (it takes tens of milliseconds); the array returned is a copy.
     """
     if lookahead < 0 or past < 1:
         raise ValueError(f"need lookahead ≥ 0 and past ≥ 1 frames, got {lookahead}, {past}")
@@ -77,6 +80,15 @@ def fir_taps(
         raise ValueError(f"cutoff must be in (0, 1) (normalised), got {cutoff!r}")
     if not (stopband_weight >= 0.0 and np.isfinite(stopband_weight)):
         raise ValueError(f"stopband_weight must be ≥ 0 and finite, got {stopband_weight!r}")
+    return _fir_taps(
+        int(order), float(cutoff), int(lookahead), int(past), float(stopband_weight)
+    ).copy()
+
+
+@lru_cache(maxsize=32)
+def _fir_taps(
+    order: int, cutoff: float, lookahead: int, past: int, stopband_weight: float
+) -> NDArray[np.float64]:
     w = np.linspace(0.0, np.pi, _GRID)
     _, h = signal.sosfreqz(butterworth(order, cutoff), worN=w)
     target = np.abs(h) ** 2
@@ -113,11 +125,23 @@ def causal_lowpass(
 
     ``"fir"`` approximates the zero-phase filter of ``model_order`` at ``cutoff`` (its taps
     factored into sections, :func:`scipy.signal.tf2sos`); ``"butterworth"`` is the causal
-    filter of ``order`` at ``cutoff``, its latency the rounded group delay.
+    filter of ``order`` at ``cutoff``, its latency the rounded group delay. Each design is
+    computed once; the sections returned are a copy.
     """
+    sos, shift = _causal_lowpass(kind, int(order), float(cutoff), int(model_order))
+    return sos.copy(), shift
+
+
+@lru_cache(maxsize=32)
+def _causal_lowpass(
+    kind: str, order: int, cutoff: float, model_order: int
+) -> tuple[NDArray[np.float64], int]:
     if kind == "fir":
-        taps = fir_taps(model_order, cutoff)
-        return np.ascontiguousarray(signal.tf2sos(taps, [1.0])), FIR_LOOKAHEAD
-    if kind == "butterworth":
-        return butterworth(order, cutoff), int(round(group_delay_frames(order, cutoff)))
-    raise ValueError(f"causal_filter must be one of {list(CAUSAL_FILTERS)}, got {kind!r}")
+        sos = np.ascontiguousarray(signal.tf2sos(fir_taps(model_order, cutoff), [1.0]))
+        shift = FIR_LOOKAHEAD
+    elif kind == "butterworth":
+        sos = butterworth(order, cutoff)
+        shift = int(round(group_delay_frames(order, cutoff)))
+    else:
+        raise ValueError(f"causal_filter must be one of {list(CAUSAL_FILTERS)}, got {kind!r}")
+    return sos, shift
