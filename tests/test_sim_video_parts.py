@@ -4,8 +4,12 @@ left behind."""
 
 from __future__ import annotations
 
+import multiprocessing
 import os
+import signal
+import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -13,7 +17,8 @@ from PIL import Image, ImageDraw
 from visprim import PrimitiveModel
 from visprim.datasets import imitation_experiment
 from visprim.imitate import imitate
-from visprim.sim.frame_workers import WorkerError, draw_workers, split
+from visprim.sim import frame_workers
+from visprim.sim.frame_workers import WorkerError, draw_workers, split, stop_deferred
 from visprim.sim.sidebyside import render_imitation
 from visprim.sim.video import write_video, write_video_parts
 
@@ -147,3 +152,53 @@ def test_imitation_video_in_parts_equals_one_process(imitation, tmp_path) -> Non
     assert len(a) == len(b) > 30
     for x, y in zip(a, b, strict=True):
         np.testing.assert_array_equal(y, x)
+
+
+@forks
+def test_a_stop_waits_for_the_deferred_block(tmp_path) -> None:
+    """SIGTERM reaches the worker inside stop_deferred: the block finishes, what follows it
+    does not run, and the worker exits as stopped."""
+    ready, signalled, done, after = (tmp_path / n for n in ("ready", "sig", "done", "after"))
+
+    def job() -> None:
+        with stop_deferred():
+            ready.touch()
+            deadline = time.monotonic() + 10
+            while not signalled.exists() and time.monotonic() < deadline:
+                time.sleep(0.01)
+            time.sleep(0.2)  # the signal has arrived by now
+            done.touch()
+        after.touch()
+
+    ctx = multiprocessing.get_context("fork")
+    p = ctx.Process(target=frame_workers._child, args=(job, ctx.Pipe(duplex=False)[1]))
+    p.start()
+    deadline = time.monotonic() + 10
+    while not ready.exists() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    p.terminate()
+    signalled.touch()
+    p.join(10)
+    assert p.exitcode == 128 + signal.SIGTERM
+    assert done.exists() and not after.exists()
+
+
+@forks
+def test_an_encoder_a_crashed_part_left_running_writes_nothing(tmp_path, monkeypatch) -> None:
+    """The child dies at once (``os._exit``) and leaves its encoder running, which writes
+    its output 0.5 s later, after the parent has cleaned up (an encoder stand-in that
+    creates its output file late): the part has nowhere to go."""
+    pytest.importorskip("imageio_ffmpeg")
+    spawn = subprocess.Popen
+
+    def late_encoder(cmd, *args, **kwargs):
+        if not str(cmd[-1]).endswith("part1"):  # the child's part
+            return spawn(cmd, *args, **kwargs)
+        return spawn(["sh", "-c", 'sleep 0.5; echo late > "$1"', "sh", cmd[-1]], *args, **kwargs)
+
+    monkeypatch.setattr(subprocess, "Popen", late_encoder)
+    target = tmp_path / "v.mp4"
+    with pytest.raises(WorkerError, match="exit code 3"):
+        write_video_parts(target, _fails_at(40, "exit"), 60, 25.0, 2)
+    time.sleep(1.5)  # the encoder left running has written by now
+    assert list(tmp_path.iterdir()) == []

@@ -14,16 +14,18 @@ visprim's kernels, a BLAS's for large products): the video's parts draw with Pil
 encode with the GIF encoder or an ffmpeg process, which use none. A worker that fails raises
 its error (type and message) in the parent; an interrupt or an error in the parent stops the
 workers: they ignore SIGINT (the parent decides), and SIGTERM makes them clean up (stop
-their encoder) and exit.
+their encoder) and exit. A worker's parts are written in a folder the parent removes at
+the end, so an encoder a crashed worker left running has nowhere to write.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import sys
 import traceback
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 #: The most processes a video is drawn by (the parent and forks of it).
@@ -87,8 +89,34 @@ class _Stopped(BaseException):
     """SIGTERM in a child: raised so that its ``finally`` clauses (an encoder's) run."""
 
 
+class _Deferral:
+    """Whether a worker's stop waits (:func:`stop_deferred`), and whether one came."""
+
+    depth = 0
+    pending = False
+
+
 def _stop(signum: int, frame: Any) -> None:
+    if _Deferral.depth:
+        _Deferral.pending = True
+        return
     raise _Stopped
+
+
+@contextlib.contextmanager
+def stop_deferred() -> Iterator[None]:
+    """A block a worker's stop (SIGTERM) does not interrupt: it takes effect when the block
+    ends. Used around starting a process whose handle the caller must hold before a stop
+    can reach it (an encoder, which would otherwise outlive its owner and write its file
+    after the cleanup). Outside a worker it changes nothing."""
+    _Deferral.depth += 1
+    try:
+        yield
+    finally:
+        _Deferral.depth -= 1
+        if not _Deferral.depth and _Deferral.pending:
+            _Deferral.pending = False
+            raise _Stopped
 
 
 def _child(job: Callable[[], None], errors: Any) -> None:

@@ -9,8 +9,9 @@
   transparent over the kept previous frame), the standard GIF optimisation: a decoder shows
   the same pictures, from a file a fraction of the size. The encoding runs without the GIL,
   alongside the thread drawing the next frame.
-* ``.mp4``: H.264 through ``imageio-ffmpeg``, a wheel that ships its own ffmpeg binary
-  (the optional extra ``pip install visprim[video]``). Frames are converted to YUV 4:2:0
+* ``.mp4``: H.264 by the ffmpeg binary of ``imageio-ffmpeg``, a wheel that ships it (the
+  optional extra ``pip install visprim[video]``), run as a process of visprim's own that
+  is killed and waited for on any error. Frames are converted to YUV 4:2:0
   (BT.601, studio range, tagged as such) in Rust, beside the drawing thread, and piped to
   ffmpeg as they are, which halves the bytes piped and spares ffmpeg its own conversion;
   width and height are rounded up to even numbers by repeating the last column and row.
@@ -32,7 +33,9 @@ import shutil
 import struct
 import subprocess
 import threading
+import time
 from collections.abc import Callable, Iterable, Iterator
+from fractions import Fraction
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -191,38 +194,67 @@ def _yuv_frames(
         yield rgb.size, yuv420(rgb)
 
 
-def _mp4(tmp: Path, frames: Iterable[tuple[tuple[int, int], np.ndarray]], fps: float) -> int:
-    """Write ``(size, yuv420p planes)`` frames (:func:`_yuv_frames`) as H.264."""
+#: x264's constant rate factor: imageio-ffmpeg's default quality (5 of 10).
+MP4_CRF = 25
+
+
+def _ffmpeg_command(path: Path, size: tuple[int, int], fps: float) -> list[str]:
+    """The ffmpeg command reading raw yuv420p frames of ``size`` (even) from its stdin and
+    writing H.264 to ``path`` (imageio-ffmpeg's ``write_frames`` command, with the settings
+    above)."""
     import imageio_ffmpeg
 
-    writer = None
+    rate = str(Fraction(fps).limit_denominator())
+    cmd = [imageio_ffmpeg.get_ffmpeg_exe(), "-y", "-f", "rawvideo", "-vcodec", "rawvideo"]
+    cmd += ["-s", f"{size[0]}x{size[1]}", "-pix_fmt", "yuv420p", "-r", rate, *MP4_COLOUR]
+    cmd += ["-i", "-", "-an", "-vcodec", "libx264", "-pix_fmt", "yuv420p"]
+    cmd += ["-crf", str(MP4_CRF), "-v", "warning", "-f", "mp4", "-preset", MP4_PRESET]
+    return [*cmd, *MP4_THREADS, *MP4_COLOUR, str(path)]
+
+
+def _mp4(tmp: Path, frames: Iterable[tuple[tuple[int, int], np.ndarray]], fps: float) -> int:
+    """Write ``(size, yuv420p planes)`` frames (:func:`_yuv_frames`) as H.264.
+
+    ffmpeg is this function's own process: it is started with a worker's stop deferred
+    (:func:`visprim.sim.frame_workers.stop_deferred`), so it is never left running unowned,
+    and on any error or stop it is killed and waited for before the error propagates, so
+    it cannot write ``tmp`` after its owner has cleaned up."""
+    from visprim.sim.frame_workers import stop_deferred
+
+    proc: subprocess.Popen[bytes] | None = None
     size = (0, 0)
     n = 0
     try:
         for frame_size, planes in frames:
-            if writer is None:
+            if proc is None:
                 size = frame_size
-                writer = imageio_ffmpeg.write_frames(
-                    str(tmp),
-                    tuple(v + v % 2 for v in size),
-                    fps=fps,
-                    codec="libx264",
-                    pix_fmt_in="yuv420p",
-                    pix_fmt_out="yuv420p",
-                    macro_block_size=1,
-                    input_params=MP4_COLOUR,
-                    output_params=["-f", "mp4", "-preset", MP4_PRESET, *MP4_THREADS, *MP4_COLOUR],
-                )
-                writer.send(None)
+                with stop_deferred():
+                    proc = subprocess.Popen(
+                        _ffmpeg_command(tmp, (size[0] + size[0] % 2, size[1] + size[1] % 2), fps),
+                        stdin=subprocess.PIPE,
+                        stdout=subprocess.DEVNULL,
+                        start_new_session=True,  # a Ctrl-C is the parent's to handle
+                    )
             elif frame_size != size:
                 raise ValueError(f"write_video: frame {n} is {frame_size}, the first {size}")
-            writer.send(planes)
+            assert proc.stdin is not None
+            try:
+                proc.stdin.write(np.ascontiguousarray(planes).data)
+            except BrokenPipeError:
+                raise RuntimeError(
+                    f"{tmp}: ffmpeg stopped at frame {n} (its message above)"
+                ) from None
             n += 1
-        if writer is None:
+        if proc is None:
             raise ValueError("write_video: no frames to write")
+        assert proc.stdin is not None
+        proc.stdin.close()
+        if proc.wait() != 0:
+            raise RuntimeError(f"{tmp}: ffmpeg failed with exit code {proc.returncode}")
     finally:
-        if writer is not None:
-            writer.close()
+        if proc is not None and proc.poll() is None:
+            proc.kill()
+            proc.wait()
     return n
 
 
@@ -289,7 +321,7 @@ def _join_mp4(parts: list[Path], out: Path) -> None:
     (ffmpeg's concat demuxer, streams copied)."""
     import imageio_ffmpeg
 
-    listing = out.with_name(out.name + ".parts.txt")
+    listing = parts[0].with_name("parts.txt")
     quoted = ("'" + str(p.resolve()).replace("'", "'\\''") + "'" for p in parts)
     listing.write_text("".join(f"file {q}\n" for q in quoted), encoding="utf-8")
     try:
@@ -344,7 +376,11 @@ def write_video_parts(
     gif = out.suffix.lower() == ".gif"
     chunks = [c for c in split(n_frames, max(1, workers)) if len(c)]
     with atomic_file(out) as tmp:
-        parts = [tmp.with_name(f"{tmp.name}.part{k}") for k in range(len(chunks))]
+        # The parts go in a folder of their own, removed at the end: once it is gone no
+        # process can create a part (an encoder a crashed worker left running, say).
+        folder = tmp.with_name(f"{tmp.name}.parts")
+        folder.mkdir()
+        parts = [folder / f"part{k}" for k in range(len(chunks))]
         try:
             palette = _GifPalette(frame(0).convert("RGB")) if gif else None
             jobs = [
@@ -362,6 +398,14 @@ def write_video_parts(
                             shutil.copyfileobj(src, fh, 1 << 20)
                     fh.write(b";")
         finally:
-            for part in parts:
-                part.unlink(missing_ok=True)
+            _remove_folder(folder)
     return out
+
+
+def _remove_folder(folder: Path, tries: int = 100) -> None:
+    """Remove ``folder`` and what is in it, again while a file appears in it meanwhile."""
+    for _ in range(tries):
+        shutil.rmtree(folder, ignore_errors=True)
+        if not folder.exists():
+            return
+        time.sleep(0.01)
