@@ -465,6 +465,9 @@ CausalSos = _visprim.CausalSos
 #: The online segmenter's front end (inverse kinematics, causal low-pass, channels, squared
 #: speed and adaptive threshold), state kept between chunks (:mod:`visprim.online.segmenter`).
 OnlineFrontEnd = _visprim.OnlineFrontEnd
+#: A stream's frames onto a uniform clock, causally (linear interpolation; rotations kept
+#: rotations), state kept between chunks (:mod:`visprim.online.segmenter`).
+StreamResampler = _visprim.StreamResampler
 
 
 def segment_channels(sos: ArrayLike, raw: ArrayLike, start: int, stop: int, features: str) -> _F64:

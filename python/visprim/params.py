@@ -631,6 +631,14 @@ ONLINE_OPTIONS: Mapping[str, OnlineOption] = {
             choices=("fir", "butterworth"),
         ),
         OnlineOption(
+            "clock",
+            "model",
+            "frames segmented on the model's clock (its frame_period_: a stream at another "
+            "rate is resampled causally by linear interpolation, at most one input frame of "
+            "latency; 'model') or at the stream's own times ('stream')",
+            choices=("model", "stream"),
+        ),
+        OnlineOption(
             "filter_order",
             2,
             "order of the causal Butterworth low-pass (causal_filter='butterworth'), at the "

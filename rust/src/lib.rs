@@ -14,6 +14,7 @@ pub mod gram;
 pub mod lanes;
 pub mod ragged;
 pub mod resample;
+pub mod resample_online;
 pub mod seg1;
 pub mod simd;
 pub mod zvc;

@@ -104,15 +104,17 @@ class OnlinePipeline:
         out: list[Event] = []
         seg = self.segmenter
         self._emitted = float(frames.times[-1])
-        if self.whole is not None:
-            self.whole.frames.extend(frames)
         if self.recogniser is not None:
             self._chunk_base = seg.n_frames
         events = seg.push(frames)
+        # The frames the segmenter took (on the model's clock): the classifiers get the same.
+        frames = seg.frames if seg.frames is not None else frames
+        if self.whole is not None and len(frames):
+            self.whole.frames.extend(frames)
         if self.recogniser is not None:
             # The classifier's per-frame description: the front end computed the bone
             # directions already; another description goes through a Trial of the chunk.
-            if self.recogniser.describe is arm_directions:
+            if self.recogniser.describe is arm_directions or not len(frames):
                 self._features = seg.bone_directions
             else:
                 self._features = self.recogniser.features(frames.as_trial(seg.arms))[: len(frames)]

@@ -4,6 +4,13 @@ Stages, each causal, frame by frame (chunks of any size give the same segments).
 1–3 and the adaptive threshold run in Rust (:class:`visprim.kernels.OnlineFrontEnd`), their
 state kept between chunks; SEG-2's rules (4–5) in Python, frame by frame:
 
+0. **The model's clock** (``clock="model"``, default, for a model with a
+   ``frame_period_``): the stream's frames are resampled causally onto the model's frame
+   period (:mod:`visprim.online.clock`), so a 60 Hz stream is filtered and cut as the
+   34 ms recordings the model learnt from; every frame count below is of these frames,
+   and each event's ``emitted`` time is when the input frame that completed its deciding
+   frame arrived. ``clock="stream"``: the frames as they come.
+
 1. **Inverse kinematics** of each pushed frame (:func:`visprim.ik.arm_angles_corpus`'s). For
    bone-direction models γ and α come from ``atan2`` on every frame (directions are exact
    for any γ, and offline's interpolation through the singular cones needs later frames),
@@ -84,6 +91,7 @@ from visprim.features import periodic_channels
 from visprim.filtering import butterworth
 from visprim.ik import DEFAULT_SINGULAR_ANGLE
 from visprim.model import PrimitiveModel
+from visprim.online.clock import ModelClock
 from visprim.online.events import MovementEnded, SegmentClosed
 from visprim.online.lowpass import causal_lowpass
 from visprim.online.ring import FrameRing
@@ -203,6 +211,9 @@ class OnlineSegmenter:
     Parameters
     ----------
     model : fitted PrimitiveModel with a SEG-2 constant (``seg2_threshold_``).
+    clock : {"model", "stream"}
+        Frames resampled onto the model's frame period (default) or taken as they come
+        (module docstring, stage 0).
     causal_filter : {"fir", "butterworth"}
         The causal low-pass (module docstring, :mod:`visprim.online.lowpass`; default
         ``"fir"``).
@@ -232,6 +243,7 @@ class OnlineSegmenter:
         self,
         model: PrimitiveModel,
         *,
+        clock: str = _O["clock"],
         causal_filter: str = _O["causal_filter"],
         filter_order: int | None = _O["filter_order"],
         threshold: str = _O["threshold"],
@@ -247,6 +259,14 @@ class OnlineSegmenter:
         if c is None or not (c > 0):
             raise ValueError("the model has no fitted SEG-2 constant (seg2_threshold_)")
         segment_filter = _checked("segment_filter", segment_filter)
+        self.clock = _checked("clock", clock)
+        period = getattr(model, "frame_period_", None)
+        #: The model's clock (stage 0), or None: the frames as they come.
+        self._clock = (
+            ModelClock(float(period)) if self.clock == "model" and period is not None else None
+        )
+        #: The frames of the last push, on the model's clock (the pushed ones without it).
+        self.frames: Frames | None = None
         self.segment_filter = segment_filter
         if confirm_frames is not None and not (
             isinstance(confirm_frames, int | np.integer) and confirm_frames >= 1
@@ -371,13 +391,18 @@ class OnlineSegmenter:
         """Bytes held by the ring buffers and the front end (fixed once the first chunk set
         them up)."""
         rings = (self._ring, self._raw, self._times)
-        return sum(r.nbytes for r in rings if r is not None) + int(self._front.memory_bytes)
+        clock = 0 if self._clock is None else self._clock.memory_bytes
+        return sum(r.nbytes for r in rings if r is not None) + int(self._front.memory_bytes) + clock
 
     # ------------------------------------------------------------------ input
 
     def push(self, frames: Frames) -> list[SegmentClosed | MovementEnded]:
         """Add a chunk; returns the segments closed and movements ended, in order."""
         out: list[SegmentClosed | MovementEnded] = []
+        arrivals = None
+        if self._clock is not None:
+            frames, arrivals = self._clock.push(frames)
+        self.frames = frames
         n = len(frames)
         directions = []
         for a in range(0, n, _BLOCK):
@@ -390,6 +415,13 @@ class OnlineSegmenter:
                 None if part.body_frame is None else np.asarray(part.body_frame, dtype=np.float64),
             )
             directions.append(bones)
+            if arrivals is not None and speeds.shape[0]:
+                # A frame is decided when the input frame that completed its successor
+                # arrived: the decided-at times are this block's clock times.
+                late = arrivals[a : a + times.shape[0]]
+                i = np.clip(np.searchsorted(times, speeds[:, 2] - 1e-9), 0, times.shape[0] - 1)
+                on = np.abs(times[i] - speeds[:, 2]) <= 1e-9
+                speeds[on, 2] = late[i[on]]
             out.extend(self._push_block(values, times, speeds, angles))
         self.bone_directions = (
             directions[0]
@@ -453,6 +485,8 @@ class OnlineSegmenter:
     def reset(self) -> None:
         """Forget the stream (buffers kept)."""
         self._front.reset()
+        if self._clock is not None:
+            self._clock.reset()
         self._reset_state()
         if self._ring is not None:
             self._ring.end = self._times.end = 0  # type: ignore[union-attr]

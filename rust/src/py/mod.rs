@@ -11,6 +11,7 @@ mod errors;
 mod front_online;
 mod gif;
 mod linalg;
+mod resample_online;
 mod signal;
 mod sosfilt_online;
 mod triangulate;
@@ -28,6 +29,7 @@ fn _visprim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     dtw_online::register(m)?;
     sosfilt_online::register(m)?;
     front_online::register(m)?;
+    resample_online::register(m)?;
     triangulate::register(m)?;
     gif::register(m)?;
     yuv::register(m)?;
