@@ -122,3 +122,30 @@ def test_the_clock_refuses_a_change_of_arrays_and_bad_times(native) -> None:
         kernels.StreamResampler(0.0, 3)
     with pytest.raises(ValueError, match="rows"):
         kernels.StreamResampler(0.1, 3).push(np.zeros(2), np.zeros((2, 4)))
+
+
+def test_frames_with_missing_values_are_left_out_and_counted(native, model) -> None:
+    """A stream with occluded markers (NaN) in a few frames: those frames are left out and
+    counted, and the events are those of the stream without them."""
+    from visprim.io import resample_trial
+
+    trial = resample_trial(native[1], PERIOD)
+    holes = np.array([5, 40, 41, 42, 70])
+    markers = trial.markers.copy()
+    markers[holes, 1, 2] = np.nan
+    joints = trial.joints.copy()
+    joints[holes[:2], 0, 0] = np.inf
+    keep = np.setdiff1d(np.arange(trial.n_frames), holes)
+    kept = Trial(
+        trial.times[keep], trial.markers[keep], trial.joints[keep], trial.body_frame[keep],
+        arms=trial.arms,
+    )  # fmt: skip
+    pipe = OnlinePipeline(model)
+    got = []
+    for a in range(0, trial.n_frames, 16):
+        b = min(trial.n_frames, a + 16)
+        got += pipe.push(Frames(trial.times[a:b], markers[a:b], joints[a:b], trial.body_frame[a:b]))
+    got += pipe.flush()
+    assert pipe.segmenter.missing_frames == holes.size
+    assert got == list(OnlinePipeline(model).replay(kept, chunk=16))
+    assert any(isinstance(e, SegmentClosed) for e in got)

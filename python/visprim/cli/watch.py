@@ -339,6 +339,13 @@ def run(args: argparse.Namespace) -> int:
         log.keep()
     kept = f"; {log.n} events written to {out}" if log is not None else ""
     print(f"{frames} frames, stream time {newest:.2f} s{kept}", file=sys.stderr)
+    missing = pipe.segmenter.missing_frames
+    if missing:
+        print(
+            f"{missing} frames with a missing value (NaN) were left out, and the stream "
+            "interpolated across them",
+            file=sys.stderr,
+        )
     if getattr(source, "max_late", 0.0) > 0.05:
         print(
             f"the replay fell behind its clock by up to {source.max_late:.2f} s",

@@ -45,9 +45,10 @@ class ModelClock:
         if self._resampler is not None:
             self._resampler.reset()
 
-    def push(self, frames: Frames) -> tuple[Frames, NDArray[np.float64]]:
+    def push(self, frames: Frames) -> tuple[Frames, NDArray[np.float64] | None]:
         """The clock's frames this chunk completes, and when each arrived (the time of the
-        input frame that completed it, seconds)."""
+        input frame that completed it, seconds; None when they are the input frames, each
+        on the clock)."""
         k = len(frames)
         m = frames.markers.reshape(k, -1)
         j = None if frames.joints is None else frames.joints.reshape(k, -1)
@@ -69,10 +70,11 @@ class ModelClock:
         if frames.body_frame is not None:
             parts.append(frames.body_frame.reshape(k, 9))
         rows = np.ascontiguousarray(np.concatenate(parts, axis=1), dtype=np.float64)
-        times, arrivals, out = self._resampler.push(
-            np.ascontiguousarray(frames.times, dtype=np.float64), rows
-        )
+        given = np.ascontiguousarray(frames.times, dtype=np.float64)
+        times, arrivals, out = self._resampler.push(given, rows)
         n = times.shape[0]
+        if n == k and np.array_equal(times, given):  # every frame on the clock: as it came
+            return frames, None
         a = m.shape[1]
         b = a + (0 if j is None else j.shape[1])
         return (

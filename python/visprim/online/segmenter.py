@@ -4,7 +4,11 @@ Stages, each causal, frame by frame (chunks of any size give the same segments).
 1–3 and the adaptive threshold run in Rust (:class:`visprim.kernels.OnlineFrontEnd`), their
 state kept between chunks; SEG-2's rules (4–5) in Python, frame by frame:
 
-0. **The model's clock** (``clock="model"``, default, for a model with a
+0. **Missing values**: a pushed frame with a NaN or infinite marker, joint or body-frame
+   value (a marker occluded in a live feed) is left out and counted
+   (``missing_frames``); the frames around it are interpolated across the gap by the
+   model's clock, or differenced across it without the clock.
+   **The model's clock** (``clock="model"``, default, for a model with a
    ``frame_period_``): the stream's frames are resampled causally onto the model's frame
    period (:mod:`visprim.online.clock`), so a 60 Hz stream is filtered and cut as the
    34 ms recordings the model learnt from; every frame count below is of these frames,
@@ -138,6 +142,27 @@ class Frames:
             self.markers[a:b],
             None if self.joints is None else self.joints[a:b],
             None if self.body_frame is None else self.body_frame[a:b],
+        )
+
+    def complete(self) -> tuple[Frames, int]:
+        """The frames whose markers, joints and body frame are all finite (a frame with an
+        occluded marker sent as NaN left out), and how many were left out."""
+        arrays = [a for a in (self.markers, self.joints, self.body_frame) if a is not None]
+        if all(np.isfinite(a).all() for a in arrays):
+            return self, 0
+        k = len(self)
+        ok = np.isfinite(self.markers.reshape(k, -1)).all(axis=1)
+        for a in (self.joints, self.body_frame):
+            if a is not None:
+                ok &= np.isfinite(a.reshape(k, -1)).all(axis=1)
+        return (
+            Frames(
+                self.times[ok],
+                self.markers[ok],
+                None if self.joints is None else self.joints[ok],
+                None if self.body_frame is None else self.body_frame[ok],
+            ),
+            int(k - ok.sum()),
         )
 
     def as_trial(self, arms: tuple[str, ...]) -> Trial:
@@ -350,7 +375,8 @@ class OnlineSegmenter:
     # ------------------------------------------------------------------ state
 
     def _reset_state(self) -> None:
-        self.n_frames = 0  #: frames received
+        self.n_frames = 0  #: frames received (on the model's clock)
+        self.missing_frames = 0  #: frames pushed with a missing value, left out
         self._next = 0  #: next frame whose z is to be processed
         self._prev_speed = 0.0
         self._prev_t = float("nan")
@@ -399,6 +425,8 @@ class OnlineSegmenter:
     def push(self, frames: Frames) -> list[SegmentClosed | MovementEnded]:
         """Add a chunk; returns the segments closed and movements ended, in order."""
         out: list[SegmentClosed | MovementEnded] = []
+        frames, missing = frames.complete()
+        self.missing_frames += missing
         arrivals = None
         if self._clock is not None:
             frames, arrivals = self._clock.push(frames)
