@@ -14,6 +14,9 @@
 //! `X ← (X + X⁻ᵀ) / 2`), which for the small steps of a stream is the spherical interpolation
 //! to third order in the step's angle.
 //!
+//! An input frame with a NaN or infinite value (an occluded marker) is left out and
+//! counted: the grid frames around it are interpolated across the gap.
+//!
 //! Memory: the previous frame (`width` values); the output grows with the chunk.
 
 use crate::buffer::{elements, try_filled};
@@ -32,6 +35,11 @@ pub struct Resampled {
     pub arrivals: Vec<f64>,
     /// Their values, `(m, width)` row-major.
     pub rows: Vec<f64>,
+    /// Input frames left out for a NaN or infinite value.
+    pub dropped: usize,
+    /// Whether the grid frames are the input frames, one for one (every input frame on
+    /// the clock, none left out).
+    pub unchanged: bool,
 }
 
 /// The resampler's state (module docstring).
@@ -111,13 +119,15 @@ impl StreamResampler {
     /// times in `out.times`, the time of the input frame that completed each (its arrival)
     /// in `out.arrivals`, their values in `out.rows` (all cleared first).
     ///
-    /// Errors (nothing changes): rows not `k · width` values (Shape); a time or value that is
-    /// NaN or infinite (NonFinite); times that do not increase, within the chunk or from the
+    /// Errors (nothing changes): rows not `k · width` values (Shape); a time that is NaN or
+    /// infinite (NonFinite); times that do not increase, within the chunk or from the
     /// previous chunk (InvalidArgument); output too large to allocate (Memory).
     pub fn push(&mut self, times: &[f64], rows: &[f64], out: &mut Resampled) -> Result<()> {
         out.times.clear();
         out.arrivals.clear();
         out.rows.clear();
+        out.dropped = 0;
+        out.unchanged = true;
         let k = times.len();
         let want = elements::<f64>(&[k, self.width], "rows")?;
         if rows.len() != want {
@@ -133,12 +143,6 @@ impl StreamResampler {
                 times[i]
             )));
         }
-        if let Some(i) = rows.iter().position(|v| !v.is_finite()) {
-            return Err(Error::NonFinite(format!(
-                "frame {} of the chunk contains NaN or infinity",
-                i / self.width
-            )));
-        }
         let mut last = self.prev_t;
         for (i, &t) in times.iter().enumerate() {
             if t <= last {
@@ -152,8 +156,15 @@ impl StreamResampler {
             return Ok(());
         }
         // Grid frames up to the chunk's last time, a bound for the allocation.
+        let w = self.width;
+        let complete = |i: &usize| rows[i * w..(i + 1) * w].iter().all(|v| v.is_finite());
+        let Some(first) = (0..k).find(complete) else {
+            out.dropped = k;
+            out.unchanged = false;
+            return Ok(());
+        };
         let origin = if self.origin.is_nan() {
-            times[0]
+            times[first]
         } else {
             self.origin
         };
@@ -172,9 +183,14 @@ impl StreamResampler {
         // Checked: from here on the state changes.
         self.origin = origin;
         let eps = 1e-6 * self.period;
-        let w = self.width;
         for (i, &t) in times.iter().enumerate() {
             let row = &rows[i * w..(i + 1) * w];
+            if !row.iter().all(|v| v.is_finite()) {
+                out.dropped += 1;
+                out.unchanged = false;
+                continue;
+            }
+            let before = out.times.len();
             loop {
                 let g = self.origin + self.next as f64 * self.period;
                 if g > t + eps {
@@ -192,10 +208,12 @@ impl StreamResampler {
                         nearest_rotation(r);
                     }
                 }
+                out.unchanged &= on_it && out.times.len() == before;
                 out.times.push(if on_it { t } else { g });
                 out.arrivals.push(t);
                 self.next += 1;
             }
+            out.unchanged &= out.times.len() == before + 1;
             self.prev.copy_from_slice(row);
             self.prev_t = t;
         }
@@ -300,6 +318,28 @@ mod tests {
     }
 
     #[test]
+    fn frames_with_missing_values_are_left_out_and_interpolated_across() {
+        let mut r = StreamResampler::new(0.1, 2, None).unwrap();
+        let mut out = Resampled::default();
+        let rows = [0.0, 0.0, f64::NAN, 1.0, 2.0, 2.0, 3.0, 3.0];
+        r.push(&[0.0, 0.1, 0.2, 0.3], &rows, &mut out).unwrap();
+        assert_eq!((out.dropped, out.unchanged), (1, false));
+        assert_eq!(out.times.len(), 4);
+        assert!((out.rows[2] - 1.0).abs() < 1e-12 && (out.rows[3] - 1.0).abs() < 1e-12);
+        assert_eq!(out.arrivals[1], 0.2);
+        r.push(&[0.4, 0.5], &[4.0, 4.0, 5.0, 5.0], &mut out)
+            .unwrap();
+        assert_eq!((out.dropped, out.unchanged), (0, true));
+        let mut fresh = StreamResampler::new(0.1, 1, None).unwrap();
+        fresh
+            .push(&[0.0, 0.05], &[f64::NAN, 1.0], &mut out)
+            .unwrap();
+        assert_eq!((out.dropped, out.times.clone()), (1, vec![0.05]));
+        fresh.push(&[0.1], &[f64::INFINITY], &mut out).unwrap();
+        assert_eq!((out.dropped, out.times.len()), (1, 0));
+    }
+
+    #[test]
     fn bad_input_is_refused_and_changes_nothing() {
         let mut r = StreamResampler::new(0.1, 1, None).unwrap();
         run(&mut r, &[0.0, 0.1], &[1.0, 2.0]);
@@ -309,7 +349,7 @@ mod tests {
             Err(Error::InvalidArgument(_))
         ));
         assert!(matches!(
-            r.push(&[0.2], &[f64::NAN], &mut out),
+            r.push(&[f64::NAN], &[1.0], &mut out),
             Err(Error::NonFinite(_))
         ));
         assert!(matches!(

@@ -7,8 +7,10 @@ camera) is therefore put on the model's clock before it is segmented: :class:`Mo
 emits the frame at ``t₀ + n · period`` as soon as an input frame at or after it has
 arrived, the input frame itself when one falls on it, else the linear interpolation of the
 two around it (body frames brought back to rotations), in Rust
-(:class:`visprim.kernels.StreamResampler`). That costs at most one input period of latency,
-and the frames do not depend on how the stream is cut into chunks. Offline, the recording
+(:class:`visprim.kernels.StreamResampler`). A frame with a NaN or infinite value (an
+occluded marker) is left out and counted, and the clock interpolates across it. That
+costs at most one input period of latency, and the frames do not depend on how the stream
+is cut into chunks. Offline, the recording
 is resampled by a cubic spline (:func:`visprim.io.resample_trial`); for movement sampled at
 60 Hz or faster the two differ far below the model's filter cutoff.
 """
@@ -35,6 +37,8 @@ class ModelClock:
         self.period = float(period)
         self._resampler: kernels.StreamResampler | None = None
         self._layout: tuple[int, int | None, bool] | None = None
+        #: Input frames left out for a NaN or infinite value (an occluded marker).
+        self.missing_frames = 0
 
     @property
     def memory_bytes(self) -> int:
@@ -66,15 +70,20 @@ class ModelClock:
                 "body_frame) as the first"
             )
         assert self._resampler is not None
-        parts = [m] + ([] if j is None else [j])
-        if frames.body_frame is not None:
-            parts.append(frames.body_frame.reshape(k, 9))
-        rows = np.ascontiguousarray(np.concatenate(parts, axis=1), dtype=np.float64)
-        given = np.ascontiguousarray(frames.times, dtype=np.float64)
-        times, arrivals, out = self._resampler.push(given, rows)
-        n = times.shape[0]
-        if n == k and np.array_equal(times, given):  # every frame on the clock: as it came
+        if j is None and frames.body_frame is None:
+            rows = np.ascontiguousarray(m, dtype=np.float64)
+        else:
+            parts = [m] + ([] if j is None else [j])
+            if frames.body_frame is not None:
+                parts.append(frames.body_frame.reshape(k, 9))
+            rows = np.ascontiguousarray(np.concatenate(parts, axis=1), dtype=np.float64)
+        times, arrivals, out, dropped, unchanged = self._resampler.push(
+            np.ascontiguousarray(frames.times, dtype=np.float64), rows
+        )
+        self.missing_frames += dropped
+        if unchanged:  # every frame on the clock: as it came
             return frames, None
+        n = times.shape[0]
         a = m.shape[1]
         b = a + (0 if j is None else j.shape[1])
         return (

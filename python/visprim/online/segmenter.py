@@ -425,11 +425,14 @@ class OnlineSegmenter:
     def push(self, frames: Frames) -> list[SegmentClosed | MovementEnded]:
         """Add a chunk; returns the segments closed and movements ended, in order."""
         out: list[SegmentClosed | MovementEnded] = []
-        frames, missing = frames.complete()
-        self.missing_frames += missing
         arrivals = None
-        if self._clock is not None:
+        if self._clock is not None:  # it leaves out frames with missing values itself
+            missing = self._clock.missing_frames
             frames, arrivals = self._clock.push(frames)
+            self.missing_frames += self._clock.missing_frames - missing
+        else:
+            frames, missing = frames.complete()
+            self.missing_frames += missing
         self.frames = frames
         n = len(frames)
         directions = []

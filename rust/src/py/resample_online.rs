@@ -19,10 +19,12 @@ use crate::resample_online;
 /// ``StreamResampler(period, width, rotations_from=None)``: frames of ``width`` values;
 /// columns from ``rotations_from`` on are row-major 3×3 rotation matrices, brought back to
 /// the nearest rotation after interpolation. ``push(times, rows)`` (``(k,)`` s,
-/// ``(k, width)``) returns ``(times (m,), arrivals (m,), rows (m, width))``: the clock's
-/// frames the chunk completes (``arrivals``: the time of the input frame that completed
-/// each), each the input frame on it or the linear interpolation of the two around it
-/// (independent of how the stream is cut into chunks). ``reset()`` starts a new stream.
+/// ``(k, width)``) returns ``(times (m,), arrivals (m,), rows (m, width), dropped,
+/// unchanged)``: the clock's frames the chunk completes, each the input frame on it or the
+/// linear interpolation of the two around it (independent of how the stream is cut into
+/// chunks); ``arrivals`` the time of the input frame that completed each; ``dropped`` the
+/// input frames left out for a NaN or infinite value; ``unchanged`` whether the output
+/// frames are the input ones, one for one. ``reset()`` starts a new stream.
 #[pyclass(name = "StreamResampler", module = "visprim._visprim")]
 struct StreamResampler {
     inner: resample_online::StreamResampler,
@@ -32,6 +34,8 @@ type Pushed<'py> = (
     Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray1<f64>>,
     Bound<'py, PyArray2<f64>>,
+    usize,
+    bool,
 );
 
 #[pymethods]
@@ -76,6 +80,8 @@ impl StreamResampler {
             Array1::from_vec(out.times).into_pyarray(py),
             Array1::from_vec(out.arrivals).into_pyarray(py),
             rows.into_pyarray(py),
+            out.dropped,
+            out.unchanged,
         ))
     }
 
