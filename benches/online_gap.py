@@ -25,6 +25,7 @@ from __future__ import annotations
 import argparse
 import copy
 import sys
+from collections.abc import Callable
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -95,6 +96,27 @@ def _as_comparison(base: TrialComparison, on: np.ndarray, prim: np.ndarray) -> T
     )  # fmt: skip
 
 
+def table_rows(
+    ways: dict[str, list[TrialComparison]],
+    sizes: list[int],
+    cell: Callable[[dict[str, float]], str],
+) -> list[str]:
+    """One Markdown row per way: ``cell`` of the pooled figures (:func:`summarise`) of each
+    group of ``sizes`` consecutive trials, then of all of them."""
+    edges = np.cumsum([0, *sizes])
+    rows = []
+    for way, results in ways.items():
+        parts = [results[a:b] for a, b in zip(edges[:-1], edges[1:], strict=True)] + [results]
+        rows.append(f"| {way} | " + " | ".join(cell(summarise(r)) for r in parts) + " |")
+    return rows
+
+
+def table_head(first: str, groups: list[str], sizes: list[int]) -> list[str]:
+    """The header and rule of :func:`table_rows`' table."""
+    names = " | ".join(f"{g} ({n})" for g, n in zip(groups, sizes, strict=True))
+    return [f"| {first} | {names} | all ({sum(sizes)}) |", "|---|" + "---|" * (len(groups) + 1)]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--data", type=Path, default=Path("../shared/data"))
@@ -122,17 +144,9 @@ def main() -> None:
     # The groups of bench_online's table, in its order: the trials were appended in it.
     sizes = [int(v["trials"]) for k, v in table.items() if k != "all"]
     groups = [k for k in table if k != "all"]
-    rows = []
-    for way, results in ways.items():
-        a = 0
-        cells = []
-        for n in sizes:
-            s = summarise(results[a : a + n])
-            cells.append(f"{s['boundary_f1']:.3f} / {100 * s['primitive_equal']:.1f} %")
-            a += n
-        s = summarise(results)
-        cells.append(f"{s['boundary_f1']:.3f} / {100 * s['primitive_equal']:.1f} %")
-        rows.append(f"| {way} | " + " | ".join(cells) + " |")
+    rows = table_rows(
+        ways, sizes, lambda s: f"{s['boundary_f1']:.3f} / {100 * s['primitive_equal']:.1f} %"
+    )
     text = "\n".join(
         [
             f"# online against offline: the filter or the threshold — {started:%Y-%m-%d %H:%M} UTC",
@@ -144,10 +158,7 @@ def main() -> None:
             "Boundary F1 ±100 ms / primitive per segment equal, against offline SEG-2 of the "
             "same model (the ways: the module docstring).",
             "",
-            "| way | "
-            + " | ".join(f"{g} ({n})" for g, n in zip(groups, sizes, strict=True))
-            + f" | all ({sum(sizes)}) |",
-            "|---|" + "---|" * (len(groups) + 1),
+            *table_head("way", groups, sizes),
             *rows,
             "",
         ]

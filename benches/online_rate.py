@@ -35,12 +35,12 @@ from visprim.online.compare import (
     boundary_counts,
     compare_trial,
     equal_primitives,
-    summarise,
 )
 from visprim.trial import Trial
 
 sys.path.insert(0, str(Path(__file__).parent))
 import bench_online  # noqa: E402
+from online_gap import table_head, table_rows  # noqa: E402
 
 RATES = (60.0, 120.0)
 WAYS = ("34 ms (the model's period)",) + tuple(
@@ -89,22 +89,15 @@ def main() -> None:
     table, _ = bench_online.fidelity(args.data, quick=args.quick)
     sizes = [int(v["trials"]) for k, v in table.items() if k != "all"]
     groups = [k for k in table if k != "all"]
-    rows = []
-    for way, results in ways.items():
-        a = 0
-        cells = []
-        for n in [*sizes, len(results)]:
-            part = results[a : a + n] if n != len(results) else results
-            s = summarise(part)
-            klass = (
-                "—" if s["class_equal"] != s["class_equal"] else f"{100 * s['class_equal']:.1f} %"
-            )
-            cells.append(
-                f"{s['boundary_f1']:.3f} / {100 * s['primitive_equal']:.1f} % / "
-                f"{1000 * s['latency_p95']:.0f} ms / {klass}"
-            )
-            a += n
-        rows.append(f"| {way} | " + " | ".join(cells) + " |")
+
+    def cell(s: dict[str, float]) -> str:
+        klass = "—" if s["class_equal"] != s["class_equal"] else f"{100 * s['class_equal']:.1f} %"
+        return (
+            f"{s['boundary_f1']:.3f} / {100 * s['primitive_equal']:.1f} % / "
+            f"{1000 * s['latency_p95']:.0f} ms / {klass}"
+        )
+
+    rows = table_rows(ways, sizes, cell)
     text = "\n".join(
         [
             f"# online streams at other rates than the model's — {started:%Y-%m-%d %H:%M} UTC",
@@ -117,10 +110,7 @@ def main() -> None:
             "equal, against the offline pipeline of the same model on the recording at 34 ms "
             "(module docstring).",
             "",
-            "| stream | "
-            + " | ".join(f"{g} ({n})" for g, n in zip(groups, sizes, strict=True))
-            + f" | all ({sum(sizes)}) |",
-            "|---|" + "---|" * (len(groups) + 1),
+            *table_head("stream", groups, sizes),
             *rows,
             "",
         ]
