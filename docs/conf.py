@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from sphinx.application import Sphinx
+
 # The package as built by `make install`; the source tree if it is not installed.
 ROOT = Path(__file__).resolve().parents[1]
 try:
@@ -26,7 +28,7 @@ extensions = [
     "sphinx.ext.autosummary",  # the module tables of the API index (no generated pages)
     "sphinx.ext.mathjax",
     "sphinx.ext.viewcode",
-    "sphinx.ext.napoleon",  # the Google-style "Args:" docstrings of visprim.kernels
+    "sphinx.ext.napoleon",  # the Google-style "Args:" docstrings of visprim.kernels (setup)
     "numpydoc",  # every other docstring
     "cli_reference",  # docs/_ext: the command reference from visprim.cli's parsers
 ]
@@ -70,3 +72,29 @@ smartquotes = False
 html_title = f"visprim {release}"
 html_static_path: list[str] = []
 nitpicky = False
+
+
+def _napoleon_for_kernels_only(
+    app: Sphinx, what: str, name: str, obj: object, options: object, lines: list[str]
+) -> None:
+    """Napoleon reads the Google-style docstrings of ``visprim.kernels`` and nothing else.
+
+    Everywhere else napoleon would take the first ``text: more`` of a constant's ``#:``
+    comment for its type ("Type: Look-ahead of the FIR design (frames)"), and numpydoc
+    already reads the other docstrings.
+    """
+    from sphinx.ext.napoleon import _process_docstring
+
+    if name == "visprim.kernels" or name.startswith("visprim.kernels."):
+        _process_docstring(app, what, name, obj, options, lines)
+
+
+def setup(app: Sphinx) -> None:
+    """Put napoleon's docstring hook behind :func:`_napoleon_for_kernels_only`."""
+    from sphinx.ext.napoleon import _process_docstring
+
+    listeners = app.events.listeners["autodoc-process-docstring"]
+    for listener in list(listeners):
+        if listener.handler is _process_docstring:
+            app.disconnect(listener.id)
+    app.connect("autodoc-process-docstring", _napoleon_for_kernels_only)
