@@ -71,7 +71,7 @@ lint: $(DEV)   ## ruff, mypy (config in pyproject.toml), cargo fmt --check, clip
 	cargo clippy --all-targets --features python -- -D warnings
 
 docs: $(DOCS)   ## the documentation (Sphinx + numpydoc) in docs/_build/html, warnings are errors
-	$(PY) -m sphinx -E -W --keep-going -q -b html docs docs/_build/html
+	$(PY) -m sphinx -W -E --keep-going -q -b html docs docs/_build/html
 	@echo "make: the documentation is docs/_build/html/index.html"
 
 # The wheel: the same release profile and features as `maturin develop --release`, so cargo

@@ -86,6 +86,9 @@ def test_ci_runs_tests_lint_and_docs():
     docs = re.search(r"(?ms)^docs:.*?(?=^\S)", makefile)
     assert lint and "mypy" in lint.group(0) and "ruff check" in lint.group(0)
     assert docs and "sphinx -W" in docs.group(0)
+    # A fresh environment: a cached page would hide its warnings (one that another page's
+    # change brings) from a build in a tree that was built before.
+    assert " -E " in docs.group(0)
     assert (REPO / "docs" / "conf.py").is_file()
 
 
