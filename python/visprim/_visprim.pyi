@@ -104,11 +104,17 @@ class CausalSos:
 
 class StreamResampler:
     def __new__(
-        cls, period: float, width: int, rotations_from: int | None = None
+        cls,
+        period: float,
+        width: int,
+        rotations_from: int | None = None,
+        max_gap: float = ...,
     ) -> StreamResampler: ...
     def push(
         self, times: NDArray[np.float64], rows: NDArray[np.float64]
-    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], int, bool]: ...
+    ) -> tuple[
+        NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], int, bool, list[int]
+    ]: ...
     def reset(self) -> None: ...
     @property
     def period(self) -> float: ...

@@ -685,6 +685,15 @@ ONLINE_OPTIONS: Mapping[str, OnlineOption] = {
             choices=("zero_phase", "causal"),
         ),
         OnlineOption(
+            "max_gap",
+            READ_OPTIONS["max_gap"].default,
+            "a stream with no complete frame for longer than this (a long occlusion, a "
+            "stalled feed) is split there, as reading a recording splits at a gap: the "
+            "movement in progress ends at the last frame before it, and the frames after it "
+            "are segmented afresh (shorter gaps are interpolated across)",
+            "s",
+        ),
+        OnlineOption(
             "max_movement",
             60.0,
             "frames of the movement in progress kept for a whole-movement classifier",

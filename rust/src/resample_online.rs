@@ -15,7 +15,11 @@
 //! to third order in the step's angle.
 //!
 //! An input frame with a NaN or infinite value (an occluded marker) is left out and
-//! counted: the grid frames around it are interpolated across the gap.
+//! counted: the grid frames around it are interpolated across the gap. A gap longer than
+//! `max_gap` seconds between two kept frames (a long occlusion, a stalled stream) is not
+//! bridged: the clock starts again at the frame after it, as a new stream, and the grid
+//! frame index where it does is reported (`breaks`), so that the frames after it are
+//! segmented afresh.
 //!
 //! Memory: the previous frame (`width` values); the output grows with the chunk.
 
@@ -40,6 +44,9 @@ pub struct Resampled {
     /// Whether the grid frames are the input frames, one for one (every input frame on
     /// the clock, none left out).
     pub unchanged: bool,
+    /// Indices into `times` of the grid frames that start the clock again after a gap
+    /// longer than `max_gap` (the input frame after the gap, at its own time).
+    pub breaks: Vec<usize>,
 }
 
 /// The resampler's state (module docstring).
@@ -48,6 +55,8 @@ pub struct StreamResampler {
     period: f64,
     width: usize,
     rotations_from: usize,
+    /// Longest gap between kept frames that is interpolated across, seconds.
+    max_gap: f64,
     /// The stream's first time (NaN before the first frame).
     origin: f64,
     /// Index of the next grid frame to emit.
@@ -58,14 +67,25 @@ pub struct StreamResampler {
 
 impl StreamResampler {
     /// A resampler onto a clock of `period` seconds for frames of `width` values; columns
-    /// from `rotations_from` (if any) to the end are 3×3 rotation matrices.
+    /// from `rotations_from` (if any) to the end are 3×3 rotation matrices; gaps longer
+    /// than `max_gap` seconds (infinite: none) start the clock again (module docstring).
     ///
-    /// Errors: a period that is not positive and finite, a width of 0, or rotation columns
-    /// that are not whole 3×3 matrices (InvalidArgument).
-    pub fn new(period: f64, width: usize, rotations_from: Option<usize>) -> Result<Self> {
+    /// Errors: a period that is not positive and finite, a `max_gap` that is not positive,
+    /// a width of 0, or rotation columns that are not whole 3×3 matrices (InvalidArgument).
+    pub fn new(
+        period: f64,
+        width: usize,
+        rotations_from: Option<usize>,
+        max_gap: f64,
+    ) -> Result<Self> {
         if !(period.is_finite() && period > 0.0) {
             return Err(Error::InvalidArgument(format!(
                 "period must be a positive number of seconds, got {period}"
+            )));
+        }
+        if max_gap.is_nan() || max_gap <= 0.0 {
+            return Err(Error::InvalidArgument(format!(
+                "max_gap must be a positive number of seconds (or infinite), got {max_gap}"
             )));
         }
         if width == 0 {
@@ -81,6 +101,7 @@ impl StreamResampler {
             period,
             width,
             rotations_from: from,
+            max_gap,
             origin: f64::NAN,
             next: 0,
             prev_t: f64::NAN,
@@ -128,6 +149,7 @@ impl StreamResampler {
         out.rows.clear();
         out.dropped = 0;
         out.unchanged = true;
+        out.breaks.clear();
         let k = times.len();
         let want = elements::<f64>(&[k, self.width], "rows")?;
         if rows.len() != want {
@@ -170,8 +192,12 @@ impl StreamResampler {
         };
         let span = (times[k - 1] - origin) / self.period;
         let upto = (span + 1e-6).floor() as u64 + 1;
+        // A restart after a gap emits no more grid frames up to the chunk's end than the
+        // old grid would, plus the restarting frame itself: at most k more.
         let m = usize::try_from(upto.saturating_sub(self.next))
-            .map_err(|_| Error::Memory("too many grid frames".into()))?;
+            .ok()
+            .and_then(|m| m.checked_add(k))
+            .ok_or_else(|| Error::Memory("too many grid frames".into()))?;
         let rows_len = elements::<f64>(&[m, self.width], "resampled frames")?;
         for v in [&mut out.times, &mut out.arrivals] {
             v.try_reserve(m)
@@ -191,6 +217,13 @@ impl StreamResampler {
                 continue;
             }
             let before = out.times.len();
+            if t - self.prev_t > self.max_gap {
+                // Too long a gap to bridge: the clock starts again here (module docstring).
+                self.origin = t;
+                self.next = 0;
+                self.prev_t = f64::NAN;
+                out.breaks.push(before);
+            }
             loop {
                 let g = self.origin + self.next as f64 * self.period;
                 if g > t + eps {
@@ -265,7 +298,7 @@ mod tests {
     fn a_stream_on_the_clock_comes_out_unchanged() {
         let times: Vec<f64> = (0..10).map(|n| 0.5 + n as f64 * 0.034).collect();
         let rows: Vec<f64> = (0..20).map(|v| (v as f64).sin()).collect();
-        let mut r = StreamResampler::new(0.034, 2, None).unwrap();
+        let mut r = StreamResampler::new(0.034, 2, None, f64::INFINITY).unwrap();
         let (t, x) = run(&mut r, &times, &rows);
         assert_eq!((t, x), (times, rows));
     }
@@ -275,14 +308,14 @@ mod tests {
         // 60 Hz input of x = 2 t + 1 onto a 34 ms clock.
         let times: Vec<f64> = (0..61).map(|n| n as f64 / 60.0).collect();
         let rows: Vec<f64> = times.iter().map(|t| 2.0 * t + 1.0).collect();
-        let mut r = StreamResampler::new(0.034, 1, None).unwrap();
+        let mut r = StreamResampler::new(0.034, 1, None, f64::INFINITY).unwrap();
         let (t, x) = run(&mut r, &times, &rows);
         assert_eq!(t.len(), 30); // 0, 0.034, ..., 0.986 ≤ 1 s
         for (g, v) in t.iter().zip(&x) {
             assert!((v - (2.0 * g + 1.0)).abs() < 1e-12);
         }
         for cut in [1usize, 2, 7, 60] {
-            let mut r = StreamResampler::new(0.034, 1, None).unwrap();
+            let mut r = StreamResampler::new(0.034, 1, None, f64::INFINITY).unwrap();
             let (mut tt, mut xx) = (Vec::new(), Vec::new());
             for a in (0..times.len()).step_by(cut) {
                 let b = (a + cut).min(times.len());
@@ -306,7 +339,7 @@ mod tests {
         rows.extend(rot(0.0));
         rows.push(9.0);
         rows.extend(rot(0.2));
-        let mut r = StreamResampler::new(0.5, 10, Some(1)).unwrap();
+        let mut r = StreamResampler::new(0.5, 10, Some(1), f64::INFINITY).unwrap();
         let (t, x) = run(&mut r, &[0.0, 1.0], &rows);
         assert_eq!(t, vec![0.0, 0.5, 1.0]);
         let mid = &x[10..20];
@@ -319,7 +352,7 @@ mod tests {
 
     #[test]
     fn frames_with_missing_values_are_left_out_and_interpolated_across() {
-        let mut r = StreamResampler::new(0.1, 2, None).unwrap();
+        let mut r = StreamResampler::new(0.1, 2, None, f64::INFINITY).unwrap();
         let mut out = Resampled::default();
         let rows = [0.0, 0.0, f64::NAN, 1.0, 2.0, 2.0, 3.0, 3.0];
         r.push(&[0.0, 0.1, 0.2, 0.3], &rows, &mut out).unwrap();
@@ -330,7 +363,7 @@ mod tests {
         r.push(&[0.4, 0.5], &[4.0, 4.0, 5.0, 5.0], &mut out)
             .unwrap();
         assert_eq!((out.dropped, out.unchanged), (0, true));
-        let mut fresh = StreamResampler::new(0.1, 1, None).unwrap();
+        let mut fresh = StreamResampler::new(0.1, 1, None, f64::INFINITY).unwrap();
         fresh
             .push(&[0.0, 0.05], &[f64::NAN, 1.0], &mut out)
             .unwrap();
@@ -340,8 +373,40 @@ mod tests {
     }
 
     #[test]
+    fn a_gap_longer_than_max_gap_starts_the_clock_again() {
+        // 0.1 s frames, a stall of 0.5 s (and a NaN frame that makes a 0.3 s gap): the clock
+        // restarts at the frame after each gap longer than 0.25 s, at its own time.
+        let times = [0.0, 0.1, 0.2, 0.7, 0.8, 0.9, 1.0, 1.1, 1.2];
+        let rows = [0.0, 1.0, 2.0, 7.0, 8.0, f64::NAN, f64::NAN, 11.0, 12.0];
+        let want_t = vec![0.0, 0.1, 0.2, 0.7, 0.8, 1.1, 1.2];
+        let mut r = StreamResampler::new(0.1, 1, None, 0.25).unwrap();
+        let mut out = Resampled::default();
+        r.push(&times, &rows, &mut out).unwrap();
+        assert_eq!(out.breaks, vec![3, 5]);
+        assert_eq!(out.dropped, 2);
+        for (a, b) in out.times.iter().zip(&want_t) {
+            assert!((a - b).abs() < 1e-12, "{a} {b}");
+        }
+        assert_eq!(out.rows, vec![0.0, 1.0, 2.0, 7.0, 8.0, 11.0, 12.0]);
+        // Frame by frame: the same frames, the breaks where those frames are.
+        let mut r = StreamResampler::new(0.1, 1, None, 0.25).unwrap();
+        let (mut tt, mut breaks): (Vec<f64>, Vec<usize>) = (Vec::new(), Vec::new());
+        for i in 0..times.len() {
+            r.push(&times[i..=i], &rows[i..=i], &mut out).unwrap();
+            breaks.extend(out.breaks.iter().map(|b| b + tt.len()));
+            tt.extend(&out.times);
+        }
+        assert_eq!((tt.len(), breaks), (7, vec![3, 5]));
+        // Without a limit the gap is interpolated across, on the first clock.
+        let mut r = StreamResampler::new(0.1, 1, None, f64::INFINITY).unwrap();
+        r.push(&times, &rows, &mut out).unwrap();
+        assert!(out.breaks.is_empty());
+        assert_eq!(out.times.len(), 13); // 0.0, 0.1, ..., 1.2
+    }
+
+    #[test]
     fn bad_input_is_refused_and_changes_nothing() {
-        let mut r = StreamResampler::new(0.1, 1, None).unwrap();
+        let mut r = StreamResampler::new(0.1, 1, None, f64::INFINITY).unwrap();
         run(&mut r, &[0.0, 0.1], &[1.0, 2.0]);
         let mut out = Resampled::default();
         assert!(matches!(
@@ -358,8 +423,10 @@ mod tests {
         ));
         let (t2, x2) = run(&mut r, &[0.2], &[3.0]);
         assert_eq!((t2.len(), x2), (1, vec![3.0]));
-        assert!(StreamResampler::new(0.0, 1, None).is_err());
-        assert!(StreamResampler::new(0.1, 0, None).is_err());
-        assert!(StreamResampler::new(0.1, 10, Some(2)).is_err());
+        assert!(StreamResampler::new(0.0, 1, None, f64::INFINITY).is_err());
+        assert!(StreamResampler::new(0.1, 0, None, f64::INFINITY).is_err());
+        assert!(StreamResampler::new(0.1, 10, Some(2), f64::INFINITY).is_err());
+        assert!(StreamResampler::new(0.1, 1, None, 0.0).is_err());
+        assert!(StreamResampler::new(0.1, 1, None, f64::NAN).is_err());
     }
 }

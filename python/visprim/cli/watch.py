@@ -176,6 +176,8 @@ def read_source(args: argparse.Namespace, model: Any) -> Any:
             f"SOURCE {args.source} not found; give a recording file or lsl:NAME"
         )
     arm, opts = _arm(args, model)
+    if hasattr(args, "max_gap"):  # one setting: the gaps the reader fills, the stream's split
+        opts["max_gap"] = args.max_gap
     return read(path, arm, resample=common.model_period(model), **opts)
 
 
@@ -344,6 +346,14 @@ def run(args: argparse.Namespace) -> int:
         print(
             f"{missing} frames with a missing value (NaN) were left out, and the stream "
             "interpolated across them",
+            file=sys.stderr,
+        )
+    gaps = pipe.segmenter.gaps
+    if gaps:
+        print(
+            f"{gaps} gap{'s' if gaps > 1 else ''} longer than {pipe.segmenter.max_gap:g} s "
+            "split the stream: the movement in progress ended before each, and the frames "
+            "after it were segmented afresh",
             file=sys.stderr,
         )
     if getattr(source, "max_late", 0.0) > 0.05:

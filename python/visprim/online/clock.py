@@ -8,8 +8,10 @@ emits the frame at ``t₀ + n · period`` as soon as an input frame at or after 
 arrived, the input frame itself when one falls on it, else the linear interpolation of the
 two around it (body frames brought back to rotations), in Rust
 (:class:`visprim.kernels.StreamResampler`). A frame with a NaN or infinite value (an
-occluded marker) is left out and counted, and the clock interpolates across it. That
-costs at most one input period of latency, and the frames do not depend on how the stream
+occluded marker) is left out and counted, and the clock interpolates across it, up to
+``max_gap`` seconds between complete frames: after a longer gap it starts again at the
+frame after it, and says where (``breaks``), so that the segmenter starts afresh there.
+That costs at most one input period of latency, and the frames do not depend on how the stream
 is cut into chunks. Offline, the recording
 is resampled by a cubic spline (:func:`visprim.io.resample_trial`); for movement sampled at
 60 Hz or faster the two differ far below the model's filter cutoff.
@@ -33,8 +35,10 @@ __all__ = ["ModelClock"]
 class ModelClock:
     """Frames pushed in chunks → the frames every ``period`` seconds (module docstring)."""
 
-    def __init__(self, period: float) -> None:
+    def __init__(self, period: float, max_gap: float = float("inf")) -> None:
         self.period = float(period)
+        #: Longest gap between complete frames interpolated across, seconds.
+        self.max_gap = float(max_gap)
         self._resampler: kernels.StreamResampler | None = None
         self._layout: tuple[int, int | None, bool] | None = None
         #: Input frames left out for a NaN or infinite value (an occluded marker).
@@ -49,10 +53,11 @@ class ModelClock:
         if self._resampler is not None:
             self._resampler.reset()
 
-    def push(self, frames: Frames) -> tuple[Frames, NDArray[np.float64] | None]:
-        """The clock's frames this chunk completes, and when each arrived (the time of the
+    def push(self, frames: Frames) -> tuple[Frames, NDArray[np.float64] | None, list[int]]:
+        """The clock's frames this chunk completes; when each arrived (the time of the
         input frame that completed it, seconds; None when they are the input frames, each
-        on the clock)."""
+        on the clock); and the indices of those frames where the clock started again after
+        a gap longer than ``max_gap``."""
         k = len(frames)
         m = frames.markers.reshape(k, -1)
         j = None if frames.joints is None else frames.joints.reshape(k, -1)
@@ -61,7 +66,10 @@ class ModelClock:
             width = m.shape[1] + (0 if j is None else j.shape[1])
             rotations = width if frames.body_frame is not None else None
             self._resampler = kernels.StreamResampler(
-                self.period, width + (9 if frames.body_frame is not None else 0), rotations
+                self.period,
+                width + (9 if frames.body_frame is not None else 0),
+                rotations,
+                self.max_gap,
             )
             self._layout = layout
         elif layout != self._layout:
@@ -77,12 +85,12 @@ class ModelClock:
             if frames.body_frame is not None:
                 parts.append(frames.body_frame.reshape(k, 9))
             rows = np.ascontiguousarray(np.concatenate(parts, axis=1), dtype=np.float64)
-        times, arrivals, out, dropped, unchanged = self._resampler.push(
+        times, arrivals, out, dropped, unchanged, breaks = self._resampler.push(
             np.ascontiguousarray(frames.times, dtype=np.float64), rows
         )
         self.missing_frames += dropped
         if unchanged:  # every frame on the clock: as it came
-            return frames, None
+            return frames, None, breaks
         n = times.shape[0]
         a = m.shape[1]
         b = a + (0 if j is None else j.shape[1])
@@ -96,4 +104,5 @@ class ModelClock:
                 None if frames.body_frame is None else out[:, b:].reshape(n, 3, 3),
             ),
             arrivals,
+            breaks,
         )

@@ -7,7 +7,13 @@ state kept between chunks; SEG-2's rules (4–5) in Python, frame by frame:
 0. **Missing values**: a pushed frame with a NaN or infinite marker, joint or body-frame
    value (a marker occluded in a live feed) is left out and counted
    (``missing_frames``); the frames around it are interpolated across the gap by the
-   model's clock, or differenced across it without the clock.
+   model's clock, or differenced across it without the clock. **A gap** longer than
+   ``max_gap`` seconds between complete frames (a long occlusion, a stalled feed; default
+   0.2 s, the gap at which reading a recording splits it) is not bridged: the stream so
+   far ends there as at :meth:`~OnlineSegmenter.flush` (the movement in progress ends at
+   the last frame before the gap), and the frames after it are segmented afresh, as a new
+   stream (filter, velocity, threshold and SEG-2 start again; frame counts and movement
+   numbers go on), counted in ``gaps``.
    **The model's clock** (``clock="model"``, default, for a model with a
    ``frame_period_``): the stream's frames are resampled causally onto the model's frame
    period (:mod:`visprim.online.clock`), so a 60 Hz stream is filtered and cut as the
@@ -262,6 +268,9 @@ class OnlineSegmenter:
     segment_filter : {"zero_phase", "causal"}
         Values a closed segment is described by (module docstring; default
         ``"zero_phase"``).
+    max_gap : float, seconds
+        Longest gap between complete frames that is bridged; a longer one splits the
+        stream (module docstring, stage 0; default 0.2 s).
     """
 
     def __init__(
@@ -278,6 +287,7 @@ class OnlineSegmenter:
         min_travel_deg: float = _O["min_travel_deg"],
         segment_filter: str = _O["segment_filter"],
         confirm_frames: int | None = _O["confirm_frames"],
+        max_gap: float = _O["max_gap"],
     ) -> None:
         model._check_fitted()
         c = getattr(model, "seg2_threshold_", None)
@@ -285,10 +295,14 @@ class OnlineSegmenter:
             raise ValueError("the model has no fitted SEG-2 constant (seg2_threshold_)")
         segment_filter = _checked("segment_filter", segment_filter)
         self.clock = _checked("clock", clock)
+        #: Longest gap between complete frames that is bridged, seconds (stage 0).
+        self.max_gap = float(_checked("max_gap", max_gap))
         period = getattr(model, "frame_period_", None)
         #: The model's clock (stage 0), or None: the frames as they come.
         self._clock = (
-            ModelClock(float(period)) if self.clock == "model" and period is not None else None
+            ModelClock(float(period), self.max_gap)
+            if self.clock == "model" and period is not None
+            else None
         )
         #: The frames of the last push, on the model's clock (the pushed ones without it).
         self.frames: Frames | None = None
@@ -377,7 +391,16 @@ class OnlineSegmenter:
     def _reset_state(self) -> None:
         self.n_frames = 0  #: frames received (on the model's clock)
         self.missing_frames = 0  #: frames pushed with a missing value, left out
+        self.gaps = 0  #: gaps longer than max_gap that split the stream
         self._next = 0  #: next frame whose z is to be processed
+        self._piece = 0  #: first frame after the last gap (0: the stream's first)
+        self._last_time = math.nan  #: time of the last frame (clock="stream": gaps)
+        self.movement = -1
+        self.decided: list[int] = []
+        self._reset_seg2()
+
+    def _reset_seg2(self) -> None:
+        """SEG-2's state afresh, from frame ``_piece`` on (a new stream, or after a gap)."""
         self._prev_speed = 0.0
         self._prev_t = float("nan")
         self._prev_z = float("nan")
@@ -391,7 +414,6 @@ class OnlineSegmenter:
         self._run_min = (math.inf, -1)
         self._run_end = -1
         # movement
-        self.movement = -1
         self._open = False
         self._boundary = -1
         self._n_seg = 0
@@ -399,9 +421,8 @@ class OnlineSegmenter:
         self._offset = -1
         self._seeking = False  #: first_stop: a significant run ended, its stop not yet seen
         self._last_run_end_t = float("nan")
-        self._last_stop = 0
+        self._last_stop = self._piece
         self._movement_start = float("nan")
-        self.decided: list[int] = []
         self._final = False
 
     def _allocate(self, period: float) -> None:
@@ -428,16 +449,73 @@ class OnlineSegmenter:
         arrivals = None
         if self._clock is not None:  # it leaves out frames with missing values itself
             missing = self._clock.missing_frames
-            frames, arrivals = self._clock.push(frames)
+            frames, arrivals, breaks = self._clock.push(frames)
             self.missing_frames += self._clock.missing_frames - missing
         else:
             frames, missing = frames.complete()
             self.missing_frames += missing
+            breaks = self._gaps_in(frames.times)
         self.frames = frames
         n = len(frames)
-        directions = []
-        for a in range(0, n, _BLOCK):
-            part = frames if n <= _BLOCK else frames.part(a, min(n, a + _BLOCK))
+        directions: list[NDArray[np.float64]] = []
+        cuts = sorted({0, n, *breaks})
+        for lo, hi in zip(cuts[:-1], cuts[1:], strict=True):
+            if lo in breaks and self.n_frames > 0:
+                # Decided when the frame after the gap arrived.
+                at = frames.times[lo] if arrivals is None else arrivals[lo]
+                out.extend(self._restart(float(at)))
+            out.extend(self._push_piece(frames, arrivals, lo, hi, directions))
+        self.bone_directions = (
+            directions[0]
+            if len(directions) == 1
+            else np.concatenate(directions)
+            if directions
+            else np.zeros((0, 6 * len(self.arms)))
+        )
+        return out
+
+    def _gaps_in(self, times: NDArray[np.float64]) -> list[int]:
+        """clock="stream": the indices of the frames that follow a gap longer than
+        ``max_gap`` (from the previous chunk's last frame too)."""
+        if not len(times):
+            return []
+        last, self._last_time = self._last_time, float(times[-1])
+        if len(times) == 1:  # a frame at a time: no array work
+            return [0] if times[0] - last > self.max_gap else []
+        steps = np.diff(times, prepend=last)
+        return np.flatnonzero(steps > self.max_gap).tolist()
+
+    def _restart(self, emitted: float) -> list[SegmentClosed | MovementEnded]:
+        """A gap longer than ``max_gap`` (module docstring, stage 0), found at ``emitted``
+        (s): the stream so far ends as at :meth:`flush`, and what follows is segmented as a
+        new stream from the next frame, with the frame count and the movement numbers going
+        on."""
+        self._final = True
+        rows = self._front.finish()
+        rows[:, 2] = emitted
+        out = self._process(rows)
+        out.extend(self._end_movement(self.n_frames - 1, final=True, emitted=emitted))
+        self._front.reset()
+        self.gaps += 1
+        self._next = self._piece = self.n_frames
+        self._reset_seg2()
+        return out
+
+    def _push_piece(
+        self,
+        frames: Frames,
+        arrivals: NDArray[np.float64] | None,
+        lo: int,
+        hi: int,
+        directions: list[NDArray[np.float64]],
+    ) -> list[SegmentClosed | MovementEnded]:
+        """Frames ``lo:hi`` of the push, with no gap among them, through the front end and
+        SEG-2, in blocks of ``_BLOCK``."""
+        out: list[SegmentClosed | MovementEnded] = []
+        n = len(frames)
+        for a in range(lo, hi, _BLOCK):
+            b = min(hi, a + _BLOCK)
+            part = frames if (a == 0 and b == n) else frames.part(a, b)
             times = np.asarray(part.times, dtype=np.float64)
             angles, values, bones, speeds = self._front.push(
                 times,
@@ -454,13 +532,6 @@ class OnlineSegmenter:
                 on = np.abs(times[i] - speeds[:, 2]) <= 1e-9
                 speeds[on, 2] = late[i[on]]
             out.extend(self._push_block(values, times, speeds, angles))
-        self.bone_directions = (
-            directions[0]
-            if len(directions) == 1
-            else np.concatenate(directions)
-            if directions
-            else np.zeros((0, 6 * len(self.arms)))
-        )
         return out
 
     def push_values(
@@ -551,8 +622,9 @@ class OnlineSegmenter:
     ) -> None:
         c = self._threshold(f)
         speed = math.sqrt(z)
-        step = 0.5 * (speed + self._prev_speed) * (t - self._prev_t) if f > 0 else 0.0
-        local_min_back = f == 0 or (self._prev_z >= z)
+        first = f == self._piece  # the first frame of the stream, or after a gap
+        step = 0.0 if first else 0.5 * (speed + self._prev_speed) * (t - self._prev_t)
+        local_min_back = first or (self._prev_z >= z)
         self._prev_speed, self._prev_t = speed, t
         prev_z, self._prev_z = self._prev_z, z
         at_rest = self._is_stop(z, c) or z <= _STILL * c
@@ -715,11 +787,12 @@ class OnlineSegmenter:
 
     def _movement_time(self, f: int) -> float:
         """When the movement was where the filtered frame ``f`` shows it: ``shift`` frames
-        earlier, but not before the stream's first frame; the stream's last frame (an open
-        end at the end of the stream) stays itself."""
+        earlier, but not before the stream's first frame (or the first after a gap); the
+        stream's last frame (an open end at the end of the stream, or before a gap) stays
+        itself."""
         if self._final and f == self.n_frames - 1:
             return self._time(f)
-        return self._time(max(f - self._shift, 0))
+        return self._time(max(f - self._shift, self._piece))
 
     _final = False
 
@@ -743,11 +816,12 @@ class OnlineSegmenter:
         assert self._ring is not None
         if self._raw is None:
             return self._ring.window(a, b + 1)
-        ra = max(self._raw.start, a - self._shift)
+        first = max(self._raw.start, self._piece)  # no frame from before a gap
+        ra = max(first, a - self._shift)
         rb = b if self._final and b == self.n_frames - 1 else b - self._shift
         rb = max(rb, ra + 1)
         upto = min(upto, self._raw.end)
-        lo = max(self._raw.start, ra - _LEAD)
+        lo = max(first, ra - _LEAD)
         raw = self._raw.window(lo, upto)
         # lowpass(raw, short="reduce") then from_angles, in one Rust call.
         return kernels.segment_channels(

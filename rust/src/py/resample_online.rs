@@ -16,15 +16,17 @@ use crate::resample_online;
 
 /// A stream's frames onto a clock of ``period`` seconds from its first frame, causally.
 ///
-/// ``StreamResampler(period, width, rotations_from=None)``: frames of ``width`` values;
-/// columns from ``rotations_from`` on are row-major 3×3 rotation matrices, brought back to
-/// the nearest rotation after interpolation. ``push(times, rows)`` (``(k,)`` s,
-/// ``(k, width)``) returns ``(times (m,), arrivals (m,), rows (m, width), dropped,
-/// unchanged)``: the clock's frames the chunk completes, each the input frame on it or the
-/// linear interpolation of the two around it (independent of how the stream is cut into
-/// chunks); ``arrivals`` the time of the input frame that completed each; ``dropped`` the
-/// input frames left out for a NaN or infinite value; ``unchanged`` whether the output
-/// frames are the input ones, one for one. ``reset()`` starts a new stream.
+/// ``StreamResampler(period, width, rotations_from=None, max_gap=inf)``: frames of
+/// ``width`` values; columns from ``rotations_from`` on are row-major 3×3 rotation
+/// matrices, brought back to the nearest rotation after interpolation. ``push(times,
+/// rows)`` (``(k,)`` s, ``(k, width)``) returns ``(times (m,), arrivals (m,), rows (m,
+/// width), dropped, unchanged, breaks)``: the clock's frames the chunk completes, each the
+/// input frame on it or the linear interpolation of the two around it (independent of how
+/// the stream is cut into chunks); ``arrivals`` the time of the input frame that completed
+/// each; ``dropped`` the input frames left out for a NaN or infinite value; ``unchanged``
+/// whether the output frames are the input ones, one for one; ``breaks`` the indices of
+/// the output frames where the clock starts again after a gap longer than ``max_gap``
+/// seconds between kept frames (not interpolated across). ``reset()`` starts a new stream.
 #[pyclass(name = "StreamResampler", module = "visprim._visprim")]
 struct StreamResampler {
     inner: resample_online::StreamResampler,
@@ -36,15 +38,21 @@ type Pushed<'py> = (
     Bound<'py, PyArray2<f64>>,
     usize,
     bool,
+    Vec<usize>,
 );
 
 #[pymethods]
 impl StreamResampler {
     #[new]
-    #[pyo3(signature = (period, width, rotations_from=None))]
-    fn new(period: f64, width: usize, rotations_from: Option<usize>) -> PyResult<Self> {
+    #[pyo3(signature = (period, width, rotations_from=None, max_gap=f64::INFINITY))]
+    fn new(
+        period: f64,
+        width: usize,
+        rotations_from: Option<usize>,
+        max_gap: f64,
+    ) -> PyResult<Self> {
         Ok(Self {
-            inner: resample_online::StreamResampler::new(period, width, rotations_from)?,
+            inner: resample_online::StreamResampler::new(period, width, rotations_from, max_gap)?,
         })
     }
 
@@ -82,6 +90,7 @@ impl StreamResampler {
             rows.into_pyarray(py),
             out.dropped,
             out.unchanged,
+            out.breaks,
         ))
     }
 
