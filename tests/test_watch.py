@@ -224,6 +224,34 @@ def test_lsl_layouts_and_the_missing_extra(monkeypatch: pytest.MonkeyPatch) -> N
     assert str(info.value) == LSL_EXTRA
 
 
+def test_an_lsl_sample_out_of_order_is_left_out_and_counted() -> None:
+    """A repeated timestamp and one that steps back: those samples are left out and
+    counted, and the stream goes on (a stub inlet stands in for liblsl)."""
+    from visprim.online.sources import LslSource
+
+    x = np.arange(6, dtype=float)[:, None] * np.ones((6, 12))
+    pulls = [(x[:3], [10.0, 10.1, 10.1]), (x[3:5], [10.05, 10.2]), (x[5:], [10.15])]
+
+    class Inlet:
+        closed = False
+
+        def pull_chunk(self, timeout: float, max_samples: int) -> tuple[Any, list[float]]:
+            return pulls.pop(0) if pulls else (np.zeros((0, 12)), [])
+
+        def close_stream(self) -> None:
+            self.closed = True
+
+    src = LslSource("stub", 1, idle=0.0)
+    inlet = Inlet()
+    src.layout, src._inlet = lsl_layout(12, 1), inlet
+    frames = list(src)
+    times = np.concatenate([f.times for f in frames])
+    np.testing.assert_allclose(times, [0.0, 0.1, 0.2])
+    kept = np.concatenate([f.markers.reshape(len(f), -1)[:, 0] for f in frames])
+    np.testing.assert_array_equal(kept, [0.0, 1.0, 4.0])
+    assert src.out_of_order == 3 and inlet.closed
+
+
 def test_lsl_loopback(folder: Path, model_file: tuple[Path, Any], tmp_path: Path) -> None:
     lsl = pytest.importorskip("mne_lsl.lsl", reason="the extra visprim[lsl] is not installed")
     from visprim.online.sources import publish

@@ -348,6 +348,12 @@ def run(args: argparse.Namespace) -> int:
             "interpolated across them",
             file=sys.stderr,
         )
+    late = getattr(source, "out_of_order", 0)
+    if late:
+        print(
+            f"{late} samples whose timestamp did not come after the last one were left out",
+            file=sys.stderr,
+        )
     gaps = pipe.segmenter.gaps
     if gaps:
         print(

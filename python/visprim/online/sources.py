@@ -18,7 +18,9 @@ frame, metres: the markers (shoulder, elbow, wrist and hand marker of each arm, 
 (``3 n_arms × (x, y, z)``), then optionally the torso frame (its 3 × 3 rotation, row by
 row). The channel count tells which: ``12 n_arms``, ``21 n_arms``, ``12 n_arms + 9`` or
 ``21 n_arms + 9`` (for one arm, 21 channels are markers and joints). Times are the LSL
-timestamps, in seconds since the first sample received.
+timestamps, in seconds since the first sample received. A sample whose timestamp does not
+come after the last one taken (a sender's clock stepping back, a repeated sample) is left
+out and counted (``LslSource.out_of_order``), rather than ending the stream.
 """
 
 from __future__ import annotations
@@ -215,6 +217,8 @@ class LslSource:
         self.poll = float(poll)
         self._inlet: Any = None
         self.layout: LslLayout | None = None
+        #: Samples left out because their timestamp did not come after the last one taken.
+        self.out_of_order = 0
 
     def open(self) -> None:
         """Find the stream and subscribe to it (a ValueError naming the stream if it cannot
@@ -243,6 +247,7 @@ class LslSource:
         assert self.layout is not None
         lost = _lost_error()
         first: float | None = None
+        newest = -np.inf  # the last timestamp taken
         last_sample = time.perf_counter()
         try:
             while True:
@@ -256,11 +261,26 @@ class LslSource:
                         return
                     continue
                 last_sample = now
+                stamps = np.asarray(stamps, dtype=np.float64)
+                keep = _increasing(stamps, newest)
+                if not keep.all():
+                    self.out_of_order += int(np.count_nonzero(~keep))
+                    if not keep.any():
+                        continue
+                    samples, stamps = np.asarray(samples)[keep], stamps[keep]
+                newest = float(stamps[-1])
                 if first is None:
                     first = float(stamps[0])
-                yield self.layout.frames(samples, np.asarray(stamps) - first)
+                yield self.layout.frames(samples, stamps - first)
         finally:
             self.close()
+
+
+def _increasing(stamps: NDArray[np.float64], newest: float) -> NDArray[np.bool_]:
+    """Which of ``stamps`` come after ``newest`` and after every stamp kept before them
+    (a running maximum: each kept stamp is later than all earlier ones; NaN is never)."""
+    before = np.fmax.accumulate(np.concatenate(([newest], stamps)))[:-1]
+    return np.asarray(stamps > before)
 
 
 def open_lsl(name: str, n_arms: int, **options: Any) -> LslSource:
